@@ -1,0 +1,51 @@
+# Small helpers shared by every CMakeLists.txt of the project.
+
+# Adds every immediate subfolder of DIR that has a CMakeLists.txt, in name order.
+function(rslam_add_subdirectories dir)
+  file(GLOB children LIST_DIRECTORIES true RELATIVE ${CMAKE_CURRENT_SOURCE_DIR}/${dir}
+       ${CMAKE_CURRENT_SOURCE_DIR}/${dir}/*)
+  list(SORT children)
+  foreach(child ${children})
+    if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${dir}/${child}/CMakeLists.txt)
+      add_subdirectory(${dir}/${child})
+    endif()
+  endforeach()
+endfunction()
+
+# rslam_add_test(NAME name SOURCES a.cc ... LIBS lib ... [LABELS unit|integration|system ...]
+#                [TIMEOUT seconds])
+# One GoogleTest binary in build/bin, each TEST() registered with ctest on its own so ctest -j
+# runs them in parallel. Tests get RSLAM_SOURCE_DIR and RSLAM_SHARED_DATA in their environment.
+function(rslam_add_test)
+  cmake_parse_arguments(T "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  if(NOT RSLAM_BUILD_TESTS)
+    return()
+  endif()
+  if(NOT T_LABELS)
+    set(T_LABELS unit)
+  endif()
+  if(NOT T_TIMEOUT)
+    set(T_TIMEOUT 300)
+  endif()
+  add_executable(${T_NAME} ${T_SOURCES})
+  target_link_libraries(${T_NAME} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main GTest::gmock)
+  target_compile_definitions(${T_NAME} PRIVATE
+    RSLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    RSLAM_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  gtest_discover_tests(${T_NAME}
+    DISCOVERY_TIMEOUT 60
+    PROPERTIES LABELS "${T_LABELS}" TIMEOUT ${T_TIMEOUT}
+               ENVIRONMENT "RSLAM_SHARED_DATA=${PROJECT_SOURCE_DIR}/../shared/data")
+endfunction()
+
+# rslam_add_benchmark(NAME name SOURCES a.cc ... LIBS lib ...): a Google Benchmark binary in
+# build/bin; run it with --benchmark_format=json.
+function(rslam_add_benchmark)
+  cmake_parse_arguments(B "" "NAME" "SOURCES;LIBS" ${ARGN})
+  if(NOT RSLAM_BUILD_BENCHMARKS)
+    return()
+  endif()
+  add_executable(${B_NAME} ${B_SOURCES})
+  target_link_libraries(${B_NAME} PRIVATE ${B_LIBS} benchmark::benchmark benchmark::benchmark_main)
+  target_compile_definitions(${B_NAME} PRIVATE RSLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+endfunction()
