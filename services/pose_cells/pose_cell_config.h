@@ -1,0 +1,69 @@
+#pragma once
+// Configuration of the pose-cell network. Keys and defaults are OpenRatSLAM's (ratslam.ini
+// names), so an OpenRatSLAM config section translates one to one.
+
+#include <cstdint>
+
+#include "common/config/config_error.h"
+
+namespace rslam::pose_cells {
+
+struct PoseCellConfig {
+  int pc_dim_xy = 21;              // cells along x and y (St Lucia: 30)
+  int pc_dim_th = 36;              // cells along theta
+  int pc_w_e_dim = 7;              // excitation kernel width (cells, odd)
+  double pc_w_e_var = 1.0;         // excitation Gaussian spread (cells)
+  int pc_w_i_dim = 5;              // inhibition kernel width (cells, odd)
+  double pc_w_i_var = 2.0;         // inhibition Gaussian spread (cells)
+  double pc_global_inhib = 0.00002;
+  double pc_cell_x_size = 1.0;     // metres per cell in x and y
+  int pc_cells_to_avg = 3;         // half-width of the population-vector window around the peak
+  double vt_active_decay = 1.0;
+  double pc_vt_inject_energy = 0.15;
+  double pc_vt_restore = 0.05;
+  int vt_inject_min_age = 10;      // templates younger than this many templates inject nothing
+  double exp_delta_pc_threshold = 2.0;  // pose-cell distance that makes a new experience
+
+  template <class V>
+  void VisitFields(V& v) {
+    v("pc_dim_xy", pc_dim_xy, "pose cells along x and y (OpenRatSLAM 21, St Lucia 30)");
+    v("pc_dim_th", pc_dim_th, "pose cells along theta");
+    v("pc_w_e_dim", pc_w_e_dim, "excitation kernel width in cells (odd)");
+    v("pc_w_e_var", pc_w_e_var, "excitation Gaussian spread in cells");
+    v("pc_w_i_dim", pc_w_i_dim, "inhibition kernel width in cells (odd)");
+    v("pc_w_i_var", pc_w_i_var, "inhibition Gaussian spread in cells");
+    v("pc_global_inhib", pc_global_inhib, "global inhibition subtracted from every cell per step");
+    v("pc_cell_x_size", pc_cell_x_size, "metres per pose cell in x and y");
+    v("pc_cells_to_avg", pc_cells_to_avg, "half-width of the population-vector window (cells)");
+    v("vt_active_decay", vt_active_decay, "decay added each time the same view repeats");
+    v("pc_vt_inject_energy", pc_vt_inject_energy, "energy a familiar view injects");
+    v("pc_vt_restore", pc_vt_restore, "decay restored per view update");
+    v("vt_inject_min_age", vt_inject_min_age,
+      "a template injects only when at least this many templates were learnt after it");
+    v("exp_delta_pc_threshold", exp_delta_pc_threshold,
+      "pose-cell distance from the current experience that makes a new experience");
+  }
+
+  void Validate() const {
+    Require(pc_dim_xy >= 3 && pc_dim_xy <= 1000, "pc_dim_xy", "must be in 3..1000");
+    Require(pc_dim_th >= 3 && pc_dim_th <= 1000, "pc_dim_th", "must be in 3..1000");
+    Require(pc_w_e_dim >= 1 && pc_w_e_dim % 2 == 1 && pc_w_e_dim <= pc_dim_xy && pc_w_e_dim <= pc_dim_th,
+            "pc_w_e_dim", "must be odd, positive and no wider than the network");
+    Require(pc_w_i_dim >= 1 && pc_w_i_dim % 2 == 1 && pc_w_i_dim <= pc_dim_xy && pc_w_i_dim <= pc_dim_th,
+            "pc_w_i_dim", "must be odd, positive and no wider than the network");
+    Require(pc_w_e_var > 0, "pc_w_e_var", "must be positive");
+    Require(pc_w_i_var > 0, "pc_w_i_var", "must be positive");
+    Require(pc_global_inhib >= 0 && pc_global_inhib < 1, "pc_global_inhib", "must be in [0, 1)");
+    Require(pc_cell_x_size > 0, "pc_cell_x_size", "must be positive");
+    Require(pc_cells_to_avg >= 0 && 2 * pc_cells_to_avg + 1 <= pc_dim_xy &&
+                2 * pc_cells_to_avg + 1 <= pc_dim_th,
+            "pc_cells_to_avg", "window must fit in the network");
+    Require(vt_active_decay >= 0, "vt_active_decay", "must be non-negative");
+    Require(pc_vt_inject_energy >= 0, "pc_vt_inject_energy", "must be non-negative");
+    Require(pc_vt_restore >= 0, "pc_vt_restore", "must be non-negative");
+    Require(vt_inject_min_age >= 0, "vt_inject_min_age", "must be non-negative");
+    Require(exp_delta_pc_threshold > 0, "exp_delta_pc_threshold", "must be positive");
+  }
+};
+
+}  // namespace rslam::pose_cells

@@ -1,0 +1,736 @@
+#include "services/pose_cells/pose_cell_network.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace rslam::pose_cells {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// 1-D Gaussian weights exp(-(i - c)^2 / (2 var^2)) normalised to sum 1. OpenRatSLAM builds the
+// 3-D kernel as exp(-|r|^2 / (2 var^2)) normalised over the cube, which is exactly the outer
+// product of three of these.
+std::vector<float> GaussianWeights(int dim, double var) {
+  std::vector<double> w(dim);
+  const int c = dim / 2;
+  double total = 0.0;
+  for (int i = 0; i < dim; ++i) {
+    w[i] = std::exp(-static_cast<double>((i - c) * (i - c)) / (2.0 * var * var));
+    total += w[i];
+  }
+  std::vector<float> out(dim);
+  for (int i = 0; i < dim; ++i) out[i] = static_cast<float>(w[i] / total);
+  return out;
+}
+
+inline int Wrap(int i, int n) {
+  i %= n;
+  return i < 0 ? i + n : i;
+}
+
+inline double WrapReal(double v, double n) {
+  v = std::fmod(v, n);
+  if (v < 0) v += n;
+  if (v >= n) v -= n;
+  return v;
+}
+
+double MinDelta(double a, double b, double n) {
+  const double d = std::abs(a - b);
+  return std::min(d, n - d);
+}
+
+}  // namespace
+
+PoseCellNetwork::PoseCellNetwork(const PoseCellConfig& config)
+    : config_((config.Validate(), config)),
+      dim_xy_(config.pc_dim_xy),
+      dim_th_(config.pc_dim_th),
+      excite_w_(GaussianWeights(config.pc_w_e_dim, config.pc_w_e_var)),
+      inhibit_w_(GaussianWeights(config.pc_w_i_dim, config.pc_w_i_var)) {
+  const size_t cells = static_cast<size_t>(dim_xy_) * dim_xy_ * dim_th_;
+  activity_.assign(cells, 0.0f);
+  buf_a_.assign(cells, 0.0f);
+  buf_b_.assign(cells, 0.0f);
+  buf_c_.assign(cells, 0.0f);
+  for (AxisSet* s : {&xs_, &ys_, &ex_xs_, &ex_ys_, &tmp_xs_, &tmp_ys_}) {
+    s->Reset(dim_xy_);
+    s->index.reserve(dim_xy_);
+  }
+  for (AxisSet* s : {&ts_, &ex_ts_, &tmp_ts_}) {
+    s->Reset(dim_th_);
+    s->index.reserve(dim_th_);
+  }
+  avg_x_.assign(dim_xy_, 0.0);
+  avg_y_.assign(dim_xy_, 0.0);
+  avg_th_.assign(dim_th_, 0.0);
+  // OpenRatSLAM starts with all activity in the centre cell.
+  InjectEnergy(dim_xy_ / 2, dim_xy_ / 2, dim_th_ / 2, 1.0);
+  best_ = {static_cast<double>(dim_xy_ / 2), static_cast<double>(dim_xy_ / 2),
+           static_cast<double>(dim_th_ / 2)};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Region bookkeeping
+
+void PoseCellNetwork::Dilate(const AxisSet& in, int n, int lo, int hi, AxisSet& out) const {
+  std::fill(out.member.begin(), out.member.end(), 0);
+  out.index.clear();
+  if (lo + hi + 1 >= n) {
+    std::fill(out.member.begin(), out.member.end(), 1);
+  } else {
+    for (int i : in.index) {
+      for (int d = -lo; d <= hi; ++d) out.member[Wrap(i + d, n)] = 1;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    if (out.member[i]) out.index.push_back(i);
+  }
+}
+
+void PoseCellNetwork::ZeroRegion(std::vector<float>& buf, const AxisSet& xs, const AxisSet& ys,
+                                 const AxisSet& ts) {
+  for (int t : ts.index) {
+    for (int y : ys.index) {
+      float* row = &buf[Flat(0, y, t)];
+      for (int x : xs.index) row[x] = 0.0f;
+    }
+  }
+}
+
+void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, const AxisSet& ts) {
+  // xs/ys/ts may alias scratch sets, never xs_/ys_/ts_ themselves.
+  std::fill(xs_.member.begin(), xs_.member.end(), 0);
+  std::fill(ys_.member.begin(), ys_.member.end(), 0);
+  std::fill(ts_.member.begin(), ts_.member.end(), 0);
+  for (int t : ts.index) {
+    for (int y : ys.index) {
+      const float* row = &activity_[Flat(0, y, t)];
+      for (int x : xs.index) {
+        if (row[x] != 0.0f) {
+          xs_.member[x] = ys_.member[y] = ts_.member[t] = 1;
+        }
+      }
+    }
+  }
+  xs_.index.clear();
+  ys_.index.clear();
+  ts_.index.clear();
+  for (int i = 0; i < dim_xy_; ++i) {
+    if (xs_.member[i]) xs_.index.push_back(i);
+    if (ys_.member[i]) ys_.index.push_back(i);
+  }
+  for (int i = 0; i < dim_th_; ++i) {
+    if (ts_.member[i]) ts_.index.push_back(i);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Separable convolution passes. Input buffers are zero outside their region, so a gather that
+// reads outside it reads zeros; output buffers are zero on entry (all scratch buffers are kept
+// clean), so passes may accumulate.
+
+void PoseCellNetwork::ConvolveX(const std::vector<float>& in, std::vector<float>& out,
+                                const std::vector<float>& w, const AxisSet& xs_out,
+                                const AxisSet& ys, const AxisSet& ts) const {
+  const int k_dim = static_cast<int>(w.size());
+  const int c = k_dim / 2;
+  for (int t : ts.index) {
+    for (int y : ys.index) {
+      const float* src = &in[Flat(0, y, t)];
+      float* dst = &out[Flat(0, y, t)];
+      for (int x : xs_out.index) {
+        float s = 0.0f;
+        int xi = x - c;
+        if (xi >= 0 && xi + k_dim <= dim_xy_) {
+          for (int k = 0; k < k_dim; ++k) s += w[k] * src[xi + k];
+        } else {
+          for (int k = 0; k < k_dim; ++k) s += w[k] * src[Wrap(xi + k, dim_xy_)];
+        }
+        dst[x] = s;
+      }
+    }
+  }
+}
+
+void PoseCellNetwork::ConvolveY(const std::vector<float>& in, std::vector<float>& out,
+                                const std::vector<float>& w, const AxisSet& xs,
+                                const AxisSet& ys_in, const AxisSet& ys_out,
+                                const AxisSet& ts) const {
+  const int k_dim = static_cast<int>(w.size());
+  const int c = k_dim / 2;
+  for (int t : ts.index) {
+    for (int y : ys_out.index) {
+      float* dst = &out[Flat(0, y, t)];
+      for (int k = 0; k < k_dim; ++k) {
+        const int ys = Wrap(y + k - c, dim_xy_);
+        if (!ys_in.member[ys]) continue;
+        const float* src = &in[Flat(0, ys, t)];
+        const float wk = w[k];
+        for (int x : xs.index) dst[x] += wk * src[x];
+      }
+    }
+  }
+}
+
+void PoseCellNetwork::ConvolveTh(const std::vector<float>& in, std::vector<float>& out,
+                                 const std::vector<float>& w, const AxisSet& xs,
+                                 const AxisSet& ys, const AxisSet& ts_in,
+                                 const AxisSet& ts_out) const {
+  const int k_dim = static_cast<int>(w.size());
+  const int c = k_dim / 2;
+  for (int t : ts_out.index) {
+    for (int k = 0; k < k_dim; ++k) {
+      const int tsrc = Wrap(t + k - c, dim_th_);
+      if (!ts_in.member[tsrc]) continue;
+      const float wk = w[k];
+      for (int y : ys.index) {
+        const float* src = &in[Flat(0, y, tsrc)];
+        float* dst = &out[Flat(0, y, t)];
+        for (int x : xs.index) dst[x] += wk * src[x];
+      }
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Dynamics
+
+void PoseCellNetwork::ExciteInhibitNormalise() {
+  const int ce = config_.pc_w_e_dim / 2;
+  Dilate(xs_, dim_xy_, ce, ce, ex_xs_);
+  Dilate(ys_, dim_xy_, ce, ce, ex_ys_);
+  Dilate(ts_, dim_th_, ce, ce, ex_ts_);
+
+  // Excitation E = G_e * A, into buf_c_ over the dilated region.
+  ConvolveX(activity_, buf_a_, excite_w_, ex_xs_, ys_, ts_);
+  ConvolveY(buf_a_, buf_b_, excite_w_, ex_xs_, ys_, ex_ys_, ts_);
+  ZeroRegion(buf_a_, ex_xs_, ys_, ts_);
+  ConvolveTh(buf_b_, buf_c_, excite_w_, ex_xs_, ex_ys_, ts_, ex_ts_);
+  ZeroRegion(buf_b_, ex_xs_, ex_ys_, ts_);
+
+  // Inhibition I = G_i * E. Only needed inside E's region: outside it E - I <= 0, which the
+  // global inhibition clamps to zero anyway.
+  ConvolveX(buf_c_, buf_a_, inhibit_w_, ex_xs_, ex_ys_, ex_ts_);
+  ConvolveY(buf_a_, buf_b_, inhibit_w_, ex_xs_, ex_ys_, ex_ys_, ex_ts_);
+  ZeroRegion(buf_a_, ex_xs_, ex_ys_, ex_ts_);
+  ConvolveTh(buf_b_, buf_a_, inhibit_w_, ex_xs_, ex_ys_, ex_ts_, ex_ts_);
+  ZeroRegion(buf_b_, ex_xs_, ex_ys_, ex_ts_);
+
+  // A = max(E - I - global, 0) (OpenRatSLAM zeroes anything below the global inhibition),
+  // written over the whole dilated region, which contains the old one.
+  const float global = static_cast<float>(config_.pc_global_inhib);
+  double total = 0.0;
+  for (int t : ex_ts_.index) {
+    for (int y : ex_ys_.index) {
+      const size_t row = Flat(0, y, t);
+      float* a = &activity_[row];
+      float* e = &buf_c_[row];
+      float* inh = &buf_a_[row];
+      for (int x : ex_xs_.index) {
+        float v = e[x] - inh[x];
+        v = v >= global ? v - global : 0.0f;
+        a[x] = v;
+        total += v;
+        e[x] = 0.0f;
+        inh[x] = 0.0f;
+      }
+    }
+  }
+  if (!(total > 0.0)) {
+    // Cannot happen with valid parameters (the excitation peak always beats the inhibition);
+    // recover deterministically rather than divide by zero.
+    ZeroRegion(activity_, ex_xs_, ex_ys_, ex_ts_);
+    RecomputeSupport(ex_xs_, ex_ys_, ex_ts_);
+    InjectEnergy(static_cast<int>(best_.x), static_cast<int>(best_.y), static_cast<int>(best_.th), 1.0);
+    return;
+  }
+  RecomputeSupport(ex_xs_, ex_ys_, ex_ts_);
+  const float scale = static_cast<float>(1.0 / total);
+  for (int t : ts_.index) {
+    for (int y : ys_.index) {
+      float* a = &activity_[Flat(0, y, t)];
+      for (int x : xs_.index) a[x] *= scale;
+    }
+  }
+}
+
+void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double dt_s) {
+  if (!std::isfinite(vtrans_mps) || !std::isfinite(vrot_radps) || !std::isfinite(dt_s) || dt_s < 0) {
+    throw std::invalid_argument("PathIntegrate: velocities and dt must be finite, dt >= 0");
+  }
+  const double shift_cells = vtrans_mps * dt_s / config_.pc_cell_x_size;
+  const double cell_th = kTwoPi / dim_th_;
+  if (shift_cells != 0.0) {
+    // Each theta layer moves along its own direction; bilinear split of the fractional part
+    // (OpenRatSLAM's weight_ne/nw/se/sw are this split for shifts under one cell).
+    std::fill(tmp_xs_.member.begin(), tmp_xs_.member.end(), 0);
+    std::fill(tmp_ys_.member.begin(), tmp_ys_.member.end(), 0);
+    for (int t : ts_.index) {
+      const double dir = t * cell_th;
+      const double sx = shift_cells * std::cos(dir);
+      const double sy = shift_cells * std::sin(dir);
+      const double fx_floor = std::floor(sx);
+      const double fy_floor = std::floor(sy);
+      const int ix = static_cast<int>(fx_floor);
+      const int iy = static_cast<int>(fy_floor);
+      const float fx = static_cast<float>(sx - fx_floor);
+      const float fy = static_cast<float>(sy - fy_floor);
+      const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
+      for (int y : ys_.index) {
+        const float* src = &activity_[Flat(0, y, t)];
+        const int y0 = Wrap(y + iy, dim_xy_);
+        const int y1 = y0 + 1 == dim_xy_ ? 0 : y0 + 1;
+        float* d0 = &buf_a_[Flat(0, y0, t)];
+        float* d1 = &buf_a_[Flat(0, y1, t)];
+        tmp_ys_.member[y0] = tmp_ys_.member[y1] = 1;
+        for (int x : xs_.index) {
+          const float v = src[x];
+          if (v == 0.0f) continue;
+          const int x0 = Wrap(x + ix, dim_xy_);
+          const int x1 = x0 + 1 == dim_xy_ ? 0 : x0 + 1;
+          tmp_xs_.member[x0] = tmp_xs_.member[x1] = 1;
+          d0[x0] += w00 * v;
+          d0[x1] += w10 * v;
+          d1[x0] += w01 * v;
+          d1[x1] += w11 * v;
+        }
+      }
+    }
+    ZeroRegion(activity_, xs_, ys_, ts_);
+    std::swap(activity_, buf_a_);
+    tmp_xs_.index.clear();
+    tmp_ys_.index.clear();
+    for (int i = 0; i < dim_xy_; ++i) {
+      if (tmp_xs_.member[i]) tmp_xs_.index.push_back(i);
+      if (tmp_ys_.member[i]) tmp_ys_.index.push_back(i);
+    }
+    tmp_ts_.member = ts_.member;
+    tmp_ts_.index = ts_.index;
+    RecomputeSupport(tmp_xs_, tmp_ys_, tmp_ts_);
+  }
+
+  const double shift_th = vrot_radps * dt_s / cell_th;
+  if (shift_th != 0.0) {
+    const double floor_th = std::floor(shift_th);
+    const int it = Wrap(static_cast<int>(std::fmod(floor_th, dim_th_)), dim_th_);
+    const float f = static_cast<float>(shift_th - floor_th);
+    std::fill(tmp_ts_.member.begin(), tmp_ts_.member.end(), 0);
+    for (int t : ts_.index) {
+      const int t0 = Wrap(t + it, dim_th_);
+      const int t1 = t0 + 1 == dim_th_ ? 0 : t0 + 1;
+      tmp_ts_.member[t0] = 1;
+      if (f > 0.0f) tmp_ts_.member[t1] = 1;
+      for (int y : ys_.index) {
+        const float* src = &activity_[Flat(0, y, t)];
+        float* d0 = &buf_a_[Flat(0, y, t0)];
+        float* d1 = &buf_a_[Flat(0, y, t1)];
+        for (int x : xs_.index) {
+          const float v = src[x];
+          d0[x] += (1.0f - f) * v;
+          if (f > 0.0f) d1[x] += f * v;
+        }
+      }
+    }
+    ZeroRegion(activity_, xs_, ys_, ts_);
+    std::swap(activity_, buf_a_);
+    tmp_ts_.index.clear();
+    for (int i = 0; i < dim_th_; ++i) {
+      if (tmp_ts_.member[i]) tmp_ts_.index.push_back(i);
+    }
+    tmp_xs_.member = xs_.member;
+    tmp_xs_.index = xs_.index;
+    tmp_ys_.member = ys_.member;
+    tmp_ys_.index = ys_.index;
+    RecomputeSupport(tmp_xs_, tmp_ys_, tmp_ts_);
+  }
+}
+
+PoseCellPosition PoseCellNetwork::UpdateBestPose() {
+  float best_v = -1.0f;
+  int bx = 0, by = 0, bt = 0;
+  for (int t : ts_.index) {
+    for (int y : ys_.index) {
+      const float* row = &activity_[Flat(0, y, t)];
+      for (int x : xs_.index) {
+        if (row[x] > best_v) {
+          best_v = row[x];
+          bx = x;
+          by = y;
+          bt = t;
+        }
+      }
+    }
+  }
+  if (best_v <= 0.0f) return best_;
+  std::fill(avg_x_.begin(), avg_x_.end(), 0.0);
+  std::fill(avg_y_.begin(), avg_y_.end(), 0.0);
+  std::fill(avg_th_.begin(), avg_th_.end(), 0.0);
+  const int a = config_.pc_cells_to_avg;
+  for (int dt = -a; dt <= a; ++dt) {
+    const int t = Wrap(bt + dt, dim_th_);
+    for (int dy = -a; dy <= a; ++dy) {
+      const int y = Wrap(by + dy, dim_xy_);
+      const float* row = &activity_[Flat(0, y, t)];
+      for (int dx = -a; dx <= a; ++dx) {
+        const int x = Wrap(bx + dx, dim_xy_);
+        const double v = row[x];
+        avg_x_[x] += v;
+        avg_y_[y] += v;
+        avg_th_[t] += v;
+      }
+    }
+  }
+  // Population vector: circular mean of the cell indices, weighted by activity.
+  auto circular_mean = [](const std::vector<double>& sums, int n) {
+    double s = 0.0, c = 0.0;
+    for (int i = 0; i < n; ++i) {
+      if (sums[i] == 0.0) continue;
+      const double ang = i * kTwoPi / n;
+      s += sums[i] * std::sin(ang);
+      c += sums[i] * std::cos(ang);
+    }
+    return WrapReal(std::atan2(s, c) * n / kTwoPi, n);
+  };
+  best_.x = circular_mean(avg_x_, dim_xy_);
+  best_.y = circular_mean(avg_y_, dim_xy_);
+  best_.th = circular_mean(avg_th_, dim_th_);
+  return best_;
+}
+
+void PoseCellNetwork::Step(double vtrans_mps, double vrot_radps, double dt_s) {
+  ExciteInhibitNormalise();
+  PathIntegrate(vtrans_mps, vrot_radps, dt_s);
+  UpdateBestPose();
+}
+
+void PoseCellNetwork::InjectEnergy(int x, int y, int th, double energy) {
+  x = Wrap(x, dim_xy_);
+  y = Wrap(y, dim_xy_);
+  th = Wrap(th, dim_th_);
+  activity_[Flat(x, y, th)] += static_cast<float>(energy);
+  auto add = [](AxisSet& s, int i) {
+    if (s.member[i]) return;
+    s.member[i] = 1;
+    s.index.insert(std::lower_bound(s.index.begin(), s.index.end(), i), i);
+  };
+  add(xs_, x);
+  add(ys_, y);
+  add(ts_, th);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Views and experiences
+
+void PoseCellNetwork::ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id,
+                                    double relative_angle_rad) const {
+  if (!std::isfinite(vtrans)) throw std::invalid_argument("pose cells: vtrans is not finite");
+  if (!std::isfinite(vrot)) throw std::invalid_argument("pose cells: vrot is not finite");
+  if (!std::isfinite(dt) || dt < 0) throw std::invalid_argument("pose cells: dt must be finite and >= 0");
+  if (!std::isfinite(relative_angle_rad)) {
+    throw std::invalid_argument("pose cells: view relative angle is not finite");
+  }
+  if (template_id > views_.size()) {
+    throw std::invalid_argument("pose cells: template id " + std::to_string(template_id) +
+                                " skips ahead of the next expected id " + std::to_string(views_.size()));
+  }
+}
+
+void PoseCellNetwork::InjectView(uint32_t template_id, double relative_angle_rad, bool is_new) {
+  ValidateFrame(0.0, 0.0, 0.0, template_id, relative_angle_rad);
+  (void)is_new;  // a template is new exactly when its id is the next one; the flag is advisory
+  const double gamma_cells = relative_angle_rad / kTwoPi * dim_th_;
+  const double active_decay = config_.vt_active_decay;
+  if (template_id == views_.size()) {
+    // 001 eq. 3: associate with the cell that would be active with no orientation offset.
+    views_.push_back({best_.x, best_.y, WrapReal(best_.th - gamma_cells, dim_th_), active_decay, {}});
+  } else {
+    ViewAssociation& view = views_[template_id];
+    // Injection only from templates older than vt_inject_min_age (OpenRatSLAM: 10), so a view
+    // just learnt here does not pull the packet back to where it already is.
+    if (static_cast<uint64_t>(template_id) + config_.vt_inject_min_age < views_.size()) {
+      if (has_current_template_ && template_id == current_template_) view.decay += active_decay;
+      // OpenRatSLAM's decay curve: energy falls to zero after about three repeats.
+      const double energy =
+          config_.pc_vt_inject_energy * (30.0 - std::exp(1.2 * view.decay)) / 30.0;
+      if (energy > 0.0) {
+        view_delta_th_cells_ = gamma_cells;
+        const double th = WrapReal(view.pc_th + gamma_cells, dim_th_);  // 001 eq. 4
+        InjectEnergy(static_cast<int>(view.pc_x), static_cast<int>(view.pc_y),
+                     static_cast<int>(th), energy);
+      }
+    }
+  }
+  // Restore every template's decay towards vt_active_decay (OpenRatSLAM does this per view).
+  for (ViewAssociation& v : views_) v.decay = std::max(active_decay, v.decay - config_.pc_vt_restore);
+  previous_template_ = current_template_;
+  has_previous_template_ = has_current_template_;
+  current_template_ = template_id;
+  has_current_template_ = true;
+}
+
+double PoseCellNetwork::DeltaPc(const PoseCellPosition& p) const {
+  const double th_corrected = WrapReal(best_.th - view_delta_th_cells_, dim_th_);
+  const double dx = MinDelta(best_.x, p.x, dim_xy_);
+  const double dy = MinDelta(best_.y, p.y, dim_xy_);
+  const double dth = MinDelta(th_corrected, p.th, dim_th_);
+  return std::sqrt(dx * dx + dy * dy + dth * dth);
+}
+
+bool PoseCellNetwork::Linked(uint32_t a, uint32_t b) const {
+  const auto& la = links_of_[a];
+  return std::find(la.begin(), la.end(), b) != la.end();
+}
+
+void PoseCellNetwork::CreateExperience() {
+  const uint32_t id = static_cast<uint32_t>(experiences_.size());
+  experiences_.push_back({best_.x, best_.y, best_.th, current_template_});
+  views_[current_template_].experience_ids.push_back(id);
+  links_of_.emplace_back();
+  if (has_current_experience_) {
+    links_of_[current_experience_].push_back(id);
+    links_of_[id].push_back(current_experience_);
+  }
+  current_experience_ = id;
+  has_current_experience_ = true;
+}
+
+Action PoseCellNetwork::DecideAction() {
+  Action action;
+  if (!has_current_template_) return action;
+  action.template_id = current_template_;
+  const uint32_t from = has_current_experience_ ? current_experience_ : kNoExperience;
+  auto create = [&] {
+    CreateExperience();
+    action.kind = Action::Kind::kCreate;
+    action.relative_angle_rad = 0.0;
+  };
+  if (!has_current_experience_) {
+    create();
+  } else {
+    const ExperienceCell& cur = experiences_[current_experience_];
+    const double delta_pc = DeltaPc({cur.pc_x, cur.pc_y, cur.pc_th});
+    const ViewAssociation& view = views_[current_template_];
+    const bool view_changed = !has_previous_template_ || previous_template_ != current_template_;
+    if (view.experience_ids.empty()) {
+      create();
+    } else if (delta_pc > config_.exp_delta_pc_threshold || view_changed) {
+      // The experience of this view closest in pose-cell space, other than the current one.
+      double min_delta = std::numeric_limits<double>::max();
+      uint32_t matched = kNoExperience;
+      for (uint32_t id : view.experience_ids) {
+        if (id == current_experience_) continue;
+        const ExperienceCell& e = experiences_[id];
+        const double d = DeltaPc({e.pc_x, e.pc_y, e.pc_th});
+        if (d < min_delta) {
+          min_delta = d;
+          matched = id;
+        }
+      }
+      if (matched == kNoExperience || !(min_delta < config_.exp_delta_pc_threshold)) {
+        create();
+      } else {
+        if (Linked(current_experience_, matched)) {
+          action.kind = Action::Kind::kSet;
+        } else {
+          action.kind = Action::Kind::kLink;
+          links_of_[current_experience_].push_back(matched);
+          links_of_[matched].push_back(current_experience_);
+        }
+        current_experience_ = matched;
+        action.relative_angle_rad = view_delta_th_cells_ * kTwoPi / dim_th_;
+      }
+    }
+  }
+  if (action.kind == Action::Kind::kNone) return action;
+  action.from_experience_id = from;
+  action.experience_id = current_experience_;
+  const ExperienceCell& e = experiences_[current_experience_];
+  action.pc_x = e.pc_x;
+  action.pc_y = e.pc_y;
+  action.pc_th = e.pc_th;
+  action.sequence = next_sequence_++;
+  return action;
+}
+
+Action PoseCellNetwork::ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s,
+                                     uint32_t template_id, bool template_is_new,
+                                     double relative_angle_rad) {
+  ValidateFrame(vtrans_mps, vrot_radps, dt_s, template_id, relative_angle_rad);
+  InjectView(template_id, relative_angle_rad, template_is_new);
+  Step(vtrans_mps, vrot_radps, dt_s);
+  ++frames_processed_;
+  return DecideAction();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Access and persistence
+
+float PoseCellNetwork::Activity(int x, int y, int th) const {
+  if (x < 0 || x >= dim_xy_ || y < 0 || y >= dim_xy_ || th < 0 || th >= dim_th_) {
+    throw std::out_of_range("pose cells: cell index out of range");
+  }
+  return activity_[Flat(x, y, th)];
+}
+
+double PoseCellNetwork::TotalActivity() const {
+  double total = 0.0;
+  for (int t : ts_.index)
+    for (int y : ys_.index)
+      for (int x : xs_.index) total += activity_[Flat(x, y, t)];
+  return total;
+}
+
+int PoseCellNetwork::ActiveCellCount() const {
+  int n = 0;
+  for (int t : ts_.index)
+    for (int y : ys_.index)
+      for (int x : xs_.index) n += activity_[Flat(x, y, t)] != 0.0f;
+  return n;
+}
+
+proto::State PoseCellNetwork::SaveState() const {
+  proto::State s;
+  s.set_dim_xy(dim_xy_);
+  s.set_dim_th(dim_th_);
+  for (int t : ts_.index) {
+    for (int y : ys_.index) {
+      for (int x : xs_.index) {
+        const size_t i = Flat(x, y, t);
+        if (activity_[i] != 0.0f) {
+          s.add_active_index(static_cast<uint32_t>(i));
+          s.add_active_value(activity_[i]);
+        }
+      }
+    }
+  }
+  s.set_best_x(best_.x);
+  s.set_best_y(best_.y);
+  s.set_best_th(best_.th);
+  for (const ViewAssociation& v : views_) {
+    auto* pv = s.add_views();
+    pv->set_pc_x(v.pc_x);
+    pv->set_pc_y(v.pc_y);
+    pv->set_pc_th(v.pc_th);
+    pv->set_decay(v.decay);
+    for (uint32_t id : v.experience_ids) pv->add_experience_ids(id);
+  }
+  for (const ExperienceCell& e : experiences_) {
+    auto* pe = s.add_experiences();
+    pe->set_pc_x(e.pc_x);
+    pe->set_pc_y(e.pc_y);
+    pe->set_pc_th(e.pc_th);
+    pe->set_template_id(e.template_id);
+  }
+  for (uint32_t a = 0; a < links_of_.size(); ++a) {
+    for (uint32_t b : links_of_[a]) {
+      if (a < b) {
+        auto* pl = s.add_links();
+        pl->set_from_experience_id(a);
+        pl->set_to_experience_id(b);
+      }
+    }
+  }
+  s.set_has_current_experience(has_current_experience_);
+  s.set_current_experience_id(current_experience_);
+  s.set_has_current_template(has_current_template_);
+  s.set_current_template_id(current_template_);
+  s.set_has_previous_template(has_previous_template_);
+  s.set_previous_template_id(previous_template_);
+  s.set_view_delta_th_cells(view_delta_th_cells_);
+  s.set_next_sequence(next_sequence_);
+  s.set_frames_processed(frames_processed_);
+  return s;
+}
+
+void PoseCellNetwork::LoadState(const proto::State& s) {
+  auto fail = [](const std::string& why) {
+    throw std::invalid_argument("pose cells state: " + why);
+  };
+  if (static_cast<int>(s.dim_xy()) != dim_xy_ || static_cast<int>(s.dim_th()) != dim_th_) {
+    fail("dimensions " + std::to_string(s.dim_xy()) + "x" + std::to_string(s.dim_th()) +
+         " do not match the configured " + std::to_string(dim_xy_) + "x" + std::to_string(dim_th_));
+  }
+  if (s.active_index_size() != s.active_value_size()) fail("activity index/value counts differ");
+  if (s.active_index_size() == 0) fail("no activity");
+  const size_t cells = activity_.size();
+  for (int i = 0; i < s.active_index_size(); ++i) {
+    if (s.active_index(i) >= cells) fail("activity index out of range");
+    const float v = s.active_value(i);
+    if (!std::isfinite(v) || v < 0.0f) fail("activity value not finite or negative");
+  }
+  auto finite_pos = [&](double x, double y, double th) {
+    return std::isfinite(x) && std::isfinite(y) && std::isfinite(th) && x >= 0 && x < dim_xy_ &&
+           y >= 0 && y < dim_xy_ && th >= 0 && th < dim_th_;
+  };
+  if (!finite_pos(s.best_x(), s.best_y(), s.best_th())) fail("best pose out of range");
+  const uint32_t n_views = s.views_size();
+  const uint32_t n_exps = s.experiences_size();
+  std::vector<int> seen_exp(n_exps, 0);
+  for (const auto& v : s.views()) {
+    if (!finite_pos(v.pc_x(), v.pc_y(), v.pc_th()) || !std::isfinite(v.decay())) {
+      fail("view association out of range");
+    }
+    for (uint32_t id : v.experience_ids()) {
+      if (id >= n_exps) fail("view refers to unknown experience " + std::to_string(id));
+      ++seen_exp[id];
+    }
+  }
+  for (uint32_t i = 0; i < n_exps; ++i) {
+    const auto& e = s.experiences(i);
+    if (!finite_pos(e.pc_x(), e.pc_y(), e.pc_th())) fail("experience cell out of range");
+    if (e.template_id() >= n_views) fail("experience refers to unknown template");
+    if (seen_exp[i] != 1) fail("experience not listed exactly once under its template");
+  }
+  for (const auto& l : s.links()) {
+    if (l.from_experience_id() >= n_exps || l.to_experience_id() >= n_exps) fail("link to unknown experience");
+  }
+  if (s.has_current_experience() && s.current_experience_id() >= n_exps) fail("current experience unknown");
+  if (s.has_current_experience() != (n_exps > 0)) fail("current experience flag inconsistent");
+  if (s.has_current_template() && s.current_template_id() >= n_views) fail("current template unknown");
+  if (s.has_previous_template() && s.previous_template_id() >= n_views) fail("previous template unknown");
+  if (!std::isfinite(s.view_delta_th_cells())) fail("view offset not finite");
+
+  // Valid: commit.
+  ZeroRegion(activity_, xs_, ys_, ts_);
+  for (AxisSet* a : {&xs_, &ys_}) a->Reset(dim_xy_);
+  ts_.Reset(dim_th_);
+  for (int i = 0; i < s.active_index_size(); ++i) {
+    const uint32_t idx = s.active_index(i);
+    const int x = static_cast<int>(idx % dim_xy_);
+    const int y = static_cast<int>((idx / dim_xy_) % dim_xy_);
+    const int t = static_cast<int>(idx / (static_cast<uint32_t>(dim_xy_) * dim_xy_));
+    activity_[idx] = 0.0f;
+    InjectEnergy(x, y, t, s.active_value(i));
+  }
+  best_ = {s.best_x(), s.best_y(), s.best_th()};
+  views_.clear();
+  for (const auto& v : s.views()) {
+    views_.push_back({v.pc_x(), v.pc_y(), v.pc_th(), v.decay(),
+                      std::vector<uint32_t>(v.experience_ids().begin(), v.experience_ids().end())});
+  }
+  experiences_.clear();
+  for (const auto& e : s.experiences()) experiences_.push_back({e.pc_x(), e.pc_y(), e.pc_th(), e.template_id()});
+  links_of_.assign(n_exps, {});
+  for (const auto& l : s.links()) {
+    links_of_[l.from_experience_id()].push_back(l.to_experience_id());
+    links_of_[l.to_experience_id()].push_back(l.from_experience_id());
+  }
+  has_current_experience_ = s.has_current_experience();
+  current_experience_ = s.current_experience_id();
+  has_current_template_ = s.has_current_template();
+  current_template_ = s.current_template_id();
+  has_previous_template_ = s.has_previous_template();
+  previous_template_ = s.previous_template_id();
+  view_delta_th_cells_ = s.view_delta_th_cells();
+  next_sequence_ = s.next_sequence();
+  frames_processed_ = s.frames_processed();
+}
+
+}  // namespace rslam::pose_cells

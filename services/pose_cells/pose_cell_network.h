@@ -1,0 +1,155 @@
+#pragma once
+// The RatSLAM pose cells: a 3-D (x, y, theta) competitive attractor network that wraps in all
+// three dimensions (Milford & Wyeth, paper 000 section II; OpenRatSLAM posecell_network.cpp is
+// the reference behaviour), plus the experience bookkeeping that turns its state into
+// create/link/set actions with explicit ids (see pose_cell_action.h).
+//
+// One step, per camera frame (ProcessFrame):
+//   1. view injection (001 eqs. 3-4): a familiar template injects energy at its associated cell,
+//      shifted in theta by the view's orientation offset gamma: theta_j = theta'_ij + gamma.
+//      A new template is associated with the current best pose minus gamma (eq. 3). Repeated
+//      injection of the same view decays (vt_active_decay, restored by pc_vt_restore per frame).
+//   2. local excitation: activity convolved with a normalised 7^3 Gaussian (separable, so three
+//      1-D passes), then local inhibition with a 5^3 Gaussian subtracted, then global inhibition
+//      (subtract pc_global_inhib, clamp at 0: this also zeroes the tails), then normalise to 1.
+//   3. path integration: each theta layer k (direction k * 2pi / dim_th) shifts by
+//      vtrans * dt / cell size along its direction, fractional shifts split bilinearly (as
+//      OpenRatSLAM's four-quadrant weights); then activity shifts in theta by vrot * dt, the
+//      fraction split linearly between the two neighbouring layers.
+//   4. best pose: population vector (circular mean) over +-pc_cells_to_avg cells around the peak.
+//   5. action: OpenRatSLAM get_action with explicit ids.
+//
+// Speed: activity is compact, so every pass runs only over the product of the active index sets
+// of x, y and theta (dilated by the kernel radius or the shift); buffers are preallocated and
+// kept zero outside the active region, so a step allocates nothing.
+
+#include <cstdint>
+#include <vector>
+
+#include "services/pose_cells/pose_cell_action.h"
+#include "services/pose_cells/pose_cell_config.h"
+#include "services/pose_cells/proto/pose_cells_state.pb.h"
+
+namespace rslam::pose_cells {
+
+struct PoseCellPosition {
+  double x = 0.0;   // cells, [0, dim_xy)
+  double y = 0.0;   // cells, [0, dim_xy)
+  double th = 0.0;  // cells, [0, dim_th)
+};
+
+class PoseCellNetwork {
+ public:
+  explicit PoseCellNetwork(const PoseCellConfig& config);
+  PoseCellNetwork(const PoseCellNetwork&) = delete;
+  PoseCellNetwork& operator=(const PoseCellNetwork&) = delete;
+
+  // The single entry point: one call per camera frame with that frame's odometry (vtrans m/s,
+  // vrot rad/s over dt s) and view match (template ids dense from 0; template_is_new when the
+  // template learner just learnt it). Returns the action for the experience map.
+  // Throws std::invalid_argument (state unchanged) on non-finite or negative dt, non-finite
+  // velocities or angle, or a template id beyond the next expected id.
+  Action ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s, uint32_t template_id,
+                      bool template_is_new, double relative_angle_rad);
+
+  // Finer steps (ProcessFrame = InjectView, Step, DecideAction).
+  void InjectView(uint32_t template_id, double relative_angle_rad, bool is_new);
+  // Excite, inhibit, normalise, path-integrate by (vtrans * dt, vrot * dt), find the best pose.
+  void Step(double vtrans_mps, double vrot_radps, double dt_s);
+  // Only the attractor dynamics (no path integration, no best-pose update).
+  void ExciteInhibitNormalise();
+  void PathIntegrate(double vtrans_mps, double vrot_radps, double dt_s);
+  PoseCellPosition UpdateBestPose();
+  Action DecideAction();
+
+  // Adds energy at one cell (wrapped); for tests and tools.
+  void InjectEnergy(int x, int y, int th, double energy);
+
+  PoseCellPosition BestPose() const { return best_; }
+  float Activity(int x, int y, int th) const;
+  double TotalActivity() const;
+  // Number of cells with non-zero activity.
+  int ActiveCellCount() const;
+  const PoseCellConfig& config() const { return config_; }
+  uint32_t experience_count() const { return static_cast<uint32_t>(experiences_.size()); }
+  uint32_t template_count() const { return static_cast<uint32_t>(views_.size()); }
+  uint64_t next_sequence() const { return next_sequence_; }
+  // Distance in cells between the best pose (theta corrected by the view offset) and a cell
+  // position, wrapping in every dimension (OpenRatSLAM get_delta_pc).
+  double DeltaPc(const PoseCellPosition& p) const;
+
+  // 1-D normalised kernel weights (index 0 .. dim-1, centre dim/2); the 3-D kernel is their
+  // outer product.
+  const std::vector<float>& excite_weights() const { return excite_w_; }
+  const std::vector<float>& inhibit_weights() const { return inhibit_w_; }
+
+  proto::State SaveState() const;
+  // Throws std::invalid_argument when the state does not fit this network's dimensions or is
+  // inconsistent; the network is unchanged then.
+  void LoadState(const proto::State& state);
+
+ private:
+  struct ViewAssociation {
+    double pc_x, pc_y, pc_th;
+    double decay;
+    std::vector<uint32_t> experience_ids;
+  };
+  struct ExperienceCell {
+    double pc_x, pc_y, pc_th;
+    uint32_t template_id;
+  };
+  // Sorted active indices along one axis plus a membership mask.
+  struct AxisSet {
+    std::vector<int> index;
+    std::vector<uint8_t> member;
+    void Reset(int n) { index.clear(); member.assign(n, 0); }
+  };
+
+  size_t Flat(int x, int y, int th) const {
+    return (static_cast<size_t>(th) * dim_xy_ + y) * dim_xy_ + x;
+  }
+  void Dilate(const AxisSet& in, int n, int lo, int hi, AxisSet& out) const;
+  void ZeroRegion(std::vector<float>& buf, const AxisSet& xs, const AxisSet& ys, const AxisSet& ts);
+  // Recomputes the active sets of activity_ from scratch within the given region.
+  void RecomputeSupport(const AxisSet& xs, const AxisSet& ys, const AxisSet& ts);
+  void ConvolveX(const std::vector<float>& in, std::vector<float>& out, const std::vector<float>& w,
+                 const AxisSet& xs_out, const AxisSet& ys, const AxisSet& ts) const;
+  void ConvolveY(const std::vector<float>& in, std::vector<float>& out, const std::vector<float>& w,
+                 const AxisSet& xs, const AxisSet& ys_in, const AxisSet& ys_out,
+                 const AxisSet& ts) const;
+  void ConvolveTh(const std::vector<float>& in, std::vector<float>& out, const std::vector<float>& w,
+                  const AxisSet& xs, const AxisSet& ys, const AxisSet& ts_in,
+                  const AxisSet& ts_out) const;
+  bool Linked(uint32_t a, uint32_t b) const;
+  void CreateExperience();
+  void ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id,
+                     double relative_angle_rad) const;
+
+  const PoseCellConfig config_;
+  const int dim_xy_;
+  const int dim_th_;
+  const std::vector<float> excite_w_;
+  const std::vector<float> inhibit_w_;
+
+  std::vector<float> activity_;  // zero outside (xs_, ys_, ts_)
+  std::vector<float> buf_a_, buf_b_, buf_c_;  // scratch, always all zero between calls
+  AxisSet xs_, ys_, ts_;                      // active region of activity_
+  AxisSet ex_xs_, ex_ys_, ex_ts_, tmp_xs_, tmp_ys_, tmp_ts_;  // scratch sets
+
+  PoseCellPosition best_;
+  std::vector<ViewAssociation> views_;
+  std::vector<ExperienceCell> experiences_;
+  std::vector<std::vector<uint32_t>> links_of_;  // undirected adjacency of known links
+  bool has_current_experience_ = false;
+  uint32_t current_experience_ = 0;
+  bool has_current_template_ = false;
+  uint32_t current_template_ = 0;
+  bool has_previous_template_ = false;
+  uint32_t previous_template_ = 0;
+  double view_delta_th_cells_ = 0.0;  // orientation offset of the last view, in theta cells
+  uint64_t next_sequence_ = 0;
+  uint64_t frames_processed_ = 0;
+  std::vector<double> avg_x_, avg_y_, avg_th_;  // population-vector sums, preallocated
+};
+
+}  // namespace rslam::pose_cells
