@@ -1,0 +1,128 @@
+#include "services/occupancy/anchored_profile_map.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace rslam::occupancy {
+
+namespace {
+
+void ToProtoPose(const Pose2D& p, proto::Pose2D* out) {
+  out->set_x(p.x);
+  out->set_y(p.y);
+  out->set_theta(p.theta);
+}
+
+Pose2D FromProtoPose(const proto::Pose2D& p) { return {p.x(), p.y(), p.theta()}; }
+
+}  // namespace
+
+AnchoredProfileMap::AnchoredProfileMap(GridConfig grid, SensorModelConfig sensor)
+    : grid_(std::move(grid), std::move(sensor)) {}
+
+void AnchoredProfileMap::AddProfile(uint64_t experience_id, const Pose2D& experience_pose,
+                                    const Pose2D& robot_pose, RadialObstacleProfile profile) {
+  if (!IsFinite(experience_pose) || !IsFinite(robot_pose))
+    throw std::invalid_argument("experience or robot pose is not finite");
+  AnchoredProfile anchored{experience_id, Between(experience_pose, robot_pose), experience_pose,
+                           std::move(profile)};
+  grid_.InsertProfile(anchored.profile, robot_pose);
+  profiles_.push_back(std::move(anchored));
+}
+
+size_t AnchoredProfileMap::Rebuild(const ExperiencePoseLookup& lookup) {
+  size_t moved = 0;
+  for (AnchoredProfile& p : profiles_) {
+    if (const std::optional<Pose2D> pose = lookup(p.experience_id); pose && IsFinite(*pose)) {
+      if (pose->x != p.experience_pose.x || pose->y != p.experience_pose.y ||
+          pose->theta != p.experience_pose.theta)
+        ++moved;
+      p.experience_pose = *pose;
+    }
+  }
+  grid_.Clear();
+  for (const AnchoredProfile& p : profiles_) grid_.InsertProfile(p.profile, Compose(p.experience_pose, p.offset));
+  return moved;
+}
+
+proto::OccupancyState AnchoredProfileMap::ToProto() const {
+  proto::OccupancyState state;
+  auto* g = state.mutable_grid();
+  const GridConfig& gc = grid_.grid_config();
+  const SensorModelConfig& sc = grid_.sensor_config();
+  g->set_resolution_m(gc.resolution_m);
+  g->set_width(gc.width);
+  g->set_height(gc.height);
+  g->set_origin_x_m(gc.origin_x_m);
+  g->set_origin_y_m(gc.origin_y_m);
+  g->set_hit_probability(sc.hit_probability);
+  g->set_miss_probability(sc.miss_probability);
+  g->set_blind_probability(sc.blind_probability);
+  g->set_min_probability(sc.min_probability);
+  g->set_max_probability(sc.max_probability);
+  g->set_reliable_range_m(sc.reliable_range_m);
+  for (const AnchoredProfile& p : profiles_) {
+    auto* out = state.add_profiles();
+    out->set_experience_id(p.experience_id);
+    ToProtoPose(p.offset, out->mutable_offset());
+    ToProtoPose(p.experience_pose, out->mutable_experience_pose());
+    out->set_first_bearing_rad(p.profile.first_bearing_rad);
+    out->set_bin_width_rad(p.profile.bin_width_rad);
+    std::string status;
+    for (const RopBin& b : p.profile.bins) {
+      out->add_range_m(b.range_m);
+      out->add_nearest_visible_m(b.nearest_visible_m);
+      status.push_back(static_cast<char>(b.status));
+    }
+    out->set_status(std::move(status));
+  }
+  return state;
+}
+
+AnchoredProfileMap AnchoredProfileMap::FromProto(const proto::OccupancyState& state) {
+  const auto& g = state.grid();
+  GridConfig gc{g.resolution_m(), g.width(), g.height(), g.origin_x_m(), g.origin_y_m()};
+  SensorModelConfig sc{g.hit_probability(), g.miss_probability(), g.blind_probability(),
+                       g.min_probability(), g.max_probability(), g.reliable_range_m()};
+  try {
+    gc.Validate();
+    sc.Validate();
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("occupancy state has bad grid parameters: ") + e.what());
+  }
+  std::vector<AnchoredProfile> profiles;
+  profiles.reserve(state.profiles_size());
+  for (int i = 0; i < state.profiles_size(); ++i) {
+    const auto& in = state.profiles(i);
+    const std::string where = "occupancy state profile " + std::to_string(i) + ": ";
+    const size_t n = in.status().size();
+    if (static_cast<size_t>(in.range_m_size()) != n || static_cast<size_t>(in.nearest_visible_m_size()) != n)
+      throw std::invalid_argument(where + "ranges and statuses differ in length");
+    AnchoredProfile p;
+    p.experience_id = in.experience_id();
+    p.offset = FromProtoPose(in.offset());
+    p.experience_pose = FromProtoPose(in.experience_pose());
+    if (!IsFinite(p.offset) || !IsFinite(p.experience_pose)) throw std::invalid_argument(where + "pose not finite");
+    p.profile.first_bearing_rad = in.first_bearing_rad();
+    p.profile.bin_width_rad = in.bin_width_rad();
+    if (!std::isfinite(p.profile.first_bearing_rad) || !std::isfinite(p.profile.bin_width_rad) ||
+        p.profile.bin_width_rad <= 0)
+      throw std::invalid_argument(where + "bad bearings");
+    p.profile.bins.resize(n);
+    for (size_t k = 0; k < n; ++k) {
+      const auto status = static_cast<uint8_t>(in.status()[k]);
+      if (status > static_cast<uint8_t>(BinStatus::kBlind)) throw std::invalid_argument(where + "unknown bin status");
+      const float r = in.range_m(static_cast<int>(k)), nv = in.nearest_visible_m(static_cast<int>(k));
+      if (!std::isfinite(r) || r < 0 || !std::isfinite(nv) || nv < 0) throw std::invalid_argument(where + "bad range");
+      p.profile.bins[k] = RopBin{r, nv, static_cast<BinStatus>(status)};
+    }
+    profiles.push_back(std::move(p));
+  }
+  AnchoredProfileMap map(gc, sc);
+  map.profiles_ = std::move(profiles);
+  map.Rebuild([](uint64_t) { return std::nullopt; });
+  return map;
+}
+
+}  // namespace rslam::occupancy

@@ -1,0 +1,55 @@
+#pragma once
+// Obstacle profiles anchored to experiences. Each Radial Obstacle Profile is kept with the id of
+// the experience that was current when it was taken and the robot's offset from that
+// experience. When the experience map corrects its poses (loop closure, paper 000 eq. 3), Rebuild
+// replays every profile from its experience's corrected pose, so the occupancy grid follows the
+// map correction instead of keeping obstacles where odometry first put them.
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "services/occupancy/occupancy_grid.h"
+#include "services/occupancy/pose2d.h"
+#include "services/occupancy/proto/occupancy_state.pb.h"
+#include "services/occupancy/radial_obstacle_profile.h"
+
+namespace rslam::occupancy {
+
+struct AnchoredProfile {
+  uint64_t experience_id = 0;
+  Pose2D offset;           // robot in the experience's frame
+  Pose2D experience_pose;  // the anchor pose last used to place this profile
+  RadialObstacleProfile profile;
+};
+
+class AnchoredProfileMap {
+ public:
+  using ExperiencePoseLookup = std::function<std::optional<Pose2D>(uint64_t experience_id)>;
+
+  AnchoredProfileMap(GridConfig grid, SensorModelConfig sensor);
+
+  // Anchors a profile taken at robot_pose while experience_id (at experience_pose) was current,
+  // and inserts it into the grid. Throws std::invalid_argument on non-finite poses.
+  void AddProfile(uint64_t experience_id, const Pose2D& experience_pose, const Pose2D& robot_pose,
+                  RadialObstacleProfile profile);
+
+  // Clears the grid and replays every profile at lookup(id) ⊕ offset. Experiences the lookup does
+  // not know keep their last pose. Returns the number of profiles whose anchor moved.
+  size_t Rebuild(const ExperiencePoseLookup& lookup);
+
+  const OccupancyGrid& grid() const { return grid_; }
+  const std::vector<AnchoredProfile>& profiles() const { return profiles_; }
+
+  proto::OccupancyState ToProto() const;
+  // Validates the whole message first (throws std::invalid_argument naming the problem, leaving
+  // nothing half-loaded), then rebuilds the grid from the stored anchor poses.
+  static AnchoredProfileMap FromProto(const proto::OccupancyState& state);
+
+ private:
+  OccupancyGrid grid_;
+  std::vector<AnchoredProfile> profiles_;
+};
+
+}  // namespace rslam::occupancy

@@ -1,0 +1,157 @@
+#include "services/occupancy/occupancy_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace rslam::occupancy {
+
+double LogOddsFromProbability(double p) { return std::log(p / (1.0 - p)); }
+double ProbabilityFromLogOdds(double l) { return 1.0 / (1.0 + std::exp(-l)); }
+
+void GridConfig::Validate() const {
+  Require(std::isfinite(resolution_m) && resolution_m > 0, "resolution_m", "must be positive");
+  Require(width > 0 && width <= 20000, "width", "must be in 1..20000");
+  Require(height > 0 && height <= 20000, "height", "must be in 1..20000");
+  Require(std::isfinite(origin_x_m), "origin_x_m", "must be finite");
+  Require(std::isfinite(origin_y_m), "origin_y_m", "must be finite");
+}
+
+void SensorModelConfig::Validate() const {
+  auto prob = [](double p) { return std::isfinite(p) && p > 0.0 && p < 1.0; };
+  Require(prob(min_probability) && min_probability < 0.5, "min_probability", "must be in (0, 0.5)");
+  Require(prob(max_probability) && max_probability > 0.5, "max_probability", "must be in (0.5, 1)");
+  Require(prob(hit_probability) && hit_probability > 0.5, "hit_probability", "must be in (0.5, 1)");
+  Require(prob(miss_probability) && miss_probability < 0.5, "miss_probability", "must be in (0, 0.5)");
+  Require(prob(blind_probability) && blind_probability >= 0.5, "blind_probability", "must be in [0.5, 1)");
+  Require(std::isfinite(reliable_range_m) && reliable_range_m > 0, "reliable_range_m", "must be positive");
+}
+
+OccupancyGrid::OccupancyGrid(GridConfig grid, SensorModelConfig sensor)
+    : grid_(std::move(grid)), sensor_(std::move(sensor)) {
+  grid_.Validate();
+  sensor_.Validate();
+  log_odds_min_ = LogOddsFromProbability(sensor_.min_probability);
+  log_odds_max_ = LogOddsFromProbability(sensor_.max_probability);
+  const double hit = LogOddsFromProbability(sensor_.hit_probability);
+  const double miss = LogOddsFromProbability(sensor_.miss_probability);
+  const double blind = std::min(LogOddsFromProbability(sensor_.blind_probability), log_odds_max_);
+  hit_table_.resize(kUpdateMarker);
+  miss_table_.resize(kUpdateMarker);
+  blind_table_.resize(kUpdateMarker);
+  for (uint32_t v = 0; v < kUpdateMarker; ++v) {
+    const double l = ValueToLogOdds(static_cast<uint16_t>(v));
+    hit_table_[v] = LogOddsToValue(l + hit) + kUpdateMarker;
+    miss_table_[v] = LogOddsToValue(l + miss) + kUpdateMarker;
+    // The blind area only says "something is in there": it never overrides evidence.
+    blind_table_[v] = (v == kUnknownValue ? LogOddsToValue(blind) : static_cast<uint16_t>(v)) + kUpdateMarker;
+  }
+  values_.assign(static_cast<size_t>(grid_.width) * grid_.height, kUnknownValue);
+}
+
+double OccupancyGrid::ValueToLogOdds(uint16_t value) const {
+  if (value == kUnknownValue) return 0.0;
+  return log_odds_min_ + (value - 1) * (log_odds_max_ - log_odds_min_) / (kMaxValue - 1);
+}
+
+uint16_t OccupancyGrid::LogOddsToValue(double log_odds) const {
+  const double clamped = std::clamp(log_odds, log_odds_min_, log_odds_max_);
+  return static_cast<uint16_t>(
+      1 + std::lround((clamped - log_odds_min_) / (log_odds_max_ - log_odds_min_) * (kMaxValue - 1)));
+}
+
+double OccupancyGrid::Probability(CellIndex c) const {
+  const uint16_t v = Value(c);
+  return v == kUnknownValue ? 0.5 : ProbabilityFromLogOdds(ValueToLogOdds(v));
+}
+
+CellIndex OccupancyGrid::CellOf(double x_m, double y_m) const {
+  return {static_cast<int>(std::floor((x_m - grid_.origin_x_m) / grid_.resolution_m)),
+          static_cast<int>(std::floor((y_m - grid_.origin_y_m) / grid_.resolution_m))};
+}
+
+void OccupancyGrid::Clear() { std::fill(values_.begin(), values_.end(), kUnknownValue); }
+
+inline void OccupancyGrid::ApplyTable(size_t index, const uint16_t* table) {
+  uint16_t& v = values_[index];
+  if (v >= kUpdateMarker) return;  // already updated by this profile
+  v = table[v];
+  updated_.push_back(index);
+}
+
+// Cells from (x0, y0) to (x1, y1) in grid units, by Bresenham's line; the last cell gets a hit when
+// end_is_hit, every other cell a miss (or the blind value). Cells outside the grid are skipped.
+void OccupancyGrid::ApplyRay(double x0, double y0, double x1, double y1, bool end_is_hit,
+                             const uint16_t* miss_table) {
+  int cx = static_cast<int>(std::floor(x0)), cy = static_cast<int>(std::floor(y0));
+  const int ex = static_cast<int>(std::floor(x1)), ey = static_cast<int>(std::floor(y1));
+  const int dx = std::abs(ex - cx), dy = -std::abs(ey - cy);
+  const int sx = cx < ex ? 1 : -1, sy = cy < ey ? 1 : -1;
+  int err = dx + dy;
+  const unsigned w = static_cast<unsigned>(grid_.width), h = static_cast<unsigned>(grid_.height);
+  while (true) {
+    const bool last = cx == ex && cy == ey;
+    if (static_cast<unsigned>(cx) < w && static_cast<unsigned>(cy) < h) {
+      ApplyTable(static_cast<size_t>(cy) * w + cx, last && end_is_hit ? hit_table_.data() : miss_table);
+    }
+    if (last) break;
+    const int e2 = 2 * err;
+    if (e2 >= dy) { err += dy; cx += sx; }
+    if (e2 <= dx) { err += dx; cy += sy; }
+  }
+}
+
+int64_t OccupancyGrid::InsertProfile(const RadialObstacleProfile& profile, const Pose2D& robot_pose) {
+  if (!IsFinite(robot_pose)) throw std::invalid_argument("robot pose is not finite");
+  if (!std::isfinite(profile.first_bearing_rad) || !std::isfinite(profile.bin_width_rad) ||
+      profile.bin_width_rad <= 0)
+    throw std::invalid_argument("profile bearings are not finite or bin width is not positive");
+  updated_.clear();
+  const double inv_res = 1.0 / grid_.resolution_m;
+  const double gx = (robot_pose.x - grid_.origin_x_m) * inv_res;
+  const double gy = (robot_pose.y - grid_.origin_y_m) * inv_res;
+  const double reliable = sensor_.reliable_range_m;
+  for (size_t i = 0; i < profile.bins.size(); ++i) {
+    const RopBin& bin = profile.bins[i];
+    if (bin.status == BinStatus::kUnobserved) continue;
+    if (!std::isfinite(bin.range_m) || bin.range_m < 0 || !std::isfinite(bin.nearest_visible_m))
+      throw std::invalid_argument("profile bin " + std::to_string(i) + " has a bad range");
+    const double angle = robot_pose.theta + profile.BinCentre(i);
+    const double c = std::cos(angle) * inv_res, s = std::sin(angle) * inv_res;
+    switch (bin.status) {
+      case BinStatus::kObstacle:
+        if (bin.range_m <= reliable) {
+          ApplyRay(gx, gy, gx + c * bin.range_m, gy + s * bin.range_m, true, miss_table_.data());
+          break;
+        }
+        [[fallthrough]];  // an obstacle beyond the reliable range: free up to that range only
+      case BinStatus::kFree: {
+        const double r = std::min<double>(bin.range_m, reliable);
+        ApplyRay(gx, gy, gx + c * r, gy + s * r, false, miss_table_.data());
+        break;
+      }
+      case BinStatus::kBlind: {
+        const double r = std::min<double>(bin.nearest_visible_m, reliable);
+        ApplyRay(gx, gy, gx + c * r, gy + s * r, false, blind_table_.data());
+        break;
+      }
+      case BinStatus::kUnobserved: break;
+    }
+  }
+  for (size_t index : updated_) values_[index] -= kUpdateMarker;
+  return static_cast<int64_t>(updated_.size());
+}
+
+std::vector<int8_t> OccupancyGrid::ToRosCells() const {
+  std::vector<int8_t> probability_percent(kUpdateMarker);
+  for (uint32_t v = 0; v < kUpdateMarker; ++v)
+    probability_percent[v] = v == kUnknownValue
+                                 ? int8_t{-1}
+                                 : static_cast<int8_t>(std::lround(100.0 * ProbabilityFromLogOdds(
+                                                                             ValueToLogOdds(static_cast<uint16_t>(v)))));
+  std::vector<int8_t> out(values_.size());
+  for (size_t i = 0; i < values_.size(); ++i) out[i] = probability_percent[values_[i]];
+  return out;
+}
+
+}  // namespace rslam::occupancy

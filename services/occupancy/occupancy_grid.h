@@ -1,0 +1,119 @@
+#pragma once
+// Occupancy grid updated by Bayes' rule in log-odds form (Moravec and Elfes, paper 003 ref. [11])
+// with paper 003's vision sensor model (section 3.1, Fig. 4): along each bearing of a Radial
+// Obstacle Profile, cells up to the measured range are free (a "miss"), the cell at the range is
+// occupied (a "hit"), and nothing beyond the reliable range (40 cm for the paper's camera) is
+// used. When an obstacle fills the view (a "blind" bearing), the blind area between the robot and
+// the nearest visible floor is set to a probability halfway between unknown and occupied, unless
+// the cell already holds evidence. Log-odds are clamped to [log_odds_min, log_odds_max] so the
+// map can change again when the world does.
+//
+// As in Cartographer's ProbabilityGrid, a cell holds a 15-bit quantised log-odds (0 = never
+// observed) and every update is one lookup in a table built once per sensor model; an update
+// marker makes each profile update a cell at most once even where rays overlap.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "common/config/config_error.h"
+#include "services/occupancy/pose2d.h"
+#include "services/occupancy/radial_obstacle_profile.h"
+
+namespace rslam::occupancy {
+
+struct GridConfig {
+  double resolution_m = 0.01;
+  int width = 1000;    // cells along x
+  int height = 1000;   // cells along y
+  double origin_x_m = -5.0;  // world position of the lower-left corner of cell (0, 0)
+  double origin_y_m = -5.0;
+
+  template <class V>
+  void VisitFields(V& v) {
+    v("resolution_m", resolution_m, "cell size (m)");
+    v("width", width, "cells along x");
+    v("height", height, "cells along y");
+    v("origin_x_m", origin_x_m, "x of the lower-left corner of the grid (m)");
+    v("origin_y_m", origin_y_m, "y of the lower-left corner of the grid (m)");
+  }
+  void Validate() const;
+};
+
+struct SensorModelConfig {
+  double hit_probability = 0.7;
+  double miss_probability = 0.4;
+  double blind_probability = 0.75;  // halfway between unknown (0.5) and occupied (1.0)
+  double min_probability = 0.12;    // clamps, so the map can change again
+  double max_probability = 0.97;
+  double reliable_range_m = 0.40;   // paper 003: +-1 px is under 0.5 cm up to about 40 cm
+
+  template <class V>
+  void VisitFields(V& v) {
+    v("hit_probability", hit_probability, "P(occupied | obstacle seen in the cell)");
+    v("miss_probability", miss_probability, "P(occupied | floor seen through the cell)");
+    v("blind_probability", blind_probability, "probability given to the unknown blind area");
+    v("min_probability", min_probability, "lower clamp of a cell's probability");
+    v("max_probability", max_probability, "upper clamp of a cell's probability");
+    v("reliable_range_m", reliable_range_m, "ranges beyond this are ignored (m)");
+  }
+  void Validate() const;
+};
+
+struct CellIndex {
+  int x = 0;
+  int y = 0;
+  bool operator==(const CellIndex&) const = default;
+};
+
+class OccupancyGrid {
+ public:
+  static constexpr uint16_t kUnknownValue = 0;
+  static constexpr uint16_t kMaxValue = 32767;
+  static constexpr uint16_t kUpdateMarker = 1u << 15;
+
+  OccupancyGrid(GridConfig grid, SensorModelConfig sensor);
+  OccupancyGrid(const OccupancyGrid&) = default;
+  OccupancyGrid& operator=(const OccupancyGrid&) = default;
+
+  // Inserts a profile taken at robot_pose (world frame). Returns the number of cell updates made.
+  // Throws std::invalid_argument for a non-finite pose or a malformed profile.
+  int64_t InsertProfile(const RadialObstacleProfile& profile, const Pose2D& robot_pose);
+  void Clear();
+
+  const GridConfig& grid_config() const { return grid_; }
+  const SensorModelConfig& sensor_config() const { return sensor_; }
+  int width() const { return grid_.width; }
+  int height() const { return grid_.height; }
+  bool Contains(CellIndex c) const { return c.x >= 0 && c.y >= 0 && c.x < grid_.width && c.y < grid_.height; }
+  CellIndex CellOf(double x_m, double y_m) const;
+  bool IsKnown(CellIndex c) const { return Value(c) != kUnknownValue; }
+  double LogOdds(CellIndex c) const { return ValueToLogOdds(Value(c)); }
+  double Probability(CellIndex c) const;  // 0.5 for unknown cells
+  uint16_t Value(CellIndex c) const { return values_[static_cast<size_t>(c.y) * grid_.width + c.x]; }
+
+  // Quantisation between log-odds and stored values (kUnknownValue maps to log-odds 0).
+  double ValueToLogOdds(uint16_t value) const;
+  uint16_t LogOddsToValue(double log_odds) const;
+
+  // ROS nav_msgs/OccupancyGrid convention: -1 unknown, else round(100 * p); row-major from (0,0).
+  std::vector<int8_t> ToRosCells() const;
+  std::span<const uint16_t> values() const { return values_; }
+
+ private:
+  void ApplyRay(double x0, double y0, double x1, double y1, bool end_is_hit, const uint16_t* miss_table);
+  void ApplyTable(size_t index, const uint16_t* table);
+
+  GridConfig grid_;
+  SensorModelConfig sensor_;
+  double log_odds_min_ = 0.0, log_odds_max_ = 0.0;
+  std::vector<uint16_t> hit_table_, miss_table_, blind_table_;
+  std::vector<uint16_t> values_;
+  std::vector<size_t> updated_;  // cells carrying the update marker during one insertion
+  int64_t updates_in_profile_ = 0;
+};
+
+double LogOddsFromProbability(double p);
+double ProbabilityFromLogOdds(double l);
+
+}  // namespace rslam::occupancy
