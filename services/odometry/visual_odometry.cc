@@ -1,0 +1,142 @@
+#include "services/odometry/visual_odometry.h"
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace rslam::odometry {
+
+double ShiftedProfileDifference(std::span<const float> current, std::span<const float> previous, int shift) {
+  const int w = static_cast<int>(current.size());
+  if (previous.size() != current.size()) throw std::invalid_argument("profiles differ in length");
+  if (std::abs(shift) >= w) throw std::invalid_argument("shift leaves no overlap");
+  const int overlap = w - std::abs(shift);
+  const float* a = current.data() + std::max(shift, 0);
+  const float* b = previous.data() - std::min(shift, 0);
+  float sum = 0.0f;
+  for (int n = 0; n < overlap; ++n) sum += std::abs(a[n] - b[n]);
+  return static_cast<double>(sum) / overlap;
+}
+
+ProfileMatch BestProfileShift(std::span<const float> current, std::span<const float> previous, int max_shift,
+                              int min_overlap) {
+  const int w = static_cast<int>(current.size());
+  ProfileMatch best{0, ShiftedProfileDifference(current, previous, 0)};
+  for (int magnitude = 1; magnitude <= max_shift && w - magnitude > min_overlap; ++magnitude) {
+    for (int shift : {magnitude, -magnitude}) {
+      const double f = ShiftedProfileDifference(current, previous, shift);
+      if (f < best.difference) best = {shift, f};
+    }
+  }
+  return best;
+}
+
+void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, bool normalise_brightness,
+                            std::vector<float>& profile) {
+  profile.assign(crop.width, 0.0f);
+  std::vector<uint32_t> sums(crop.width, 0);
+  for (int y = crop.y; y < crop.y + crop.height; ++y) {
+    const uint8_t* row = grey.ptr<uint8_t>(y) + crop.x;
+    for (int x = 0; x < crop.width; ++x) sums[x] += row[x];
+  }
+  const float scale = 1.0f / (255.0f * static_cast<float>(crop.height));
+  double total = 0.0;
+  for (int x = 0; x < crop.width; ++x) {
+    profile[x] = static_cast<float>(sums[x]) * scale;
+    total += profile[x];
+  }
+  const double mean = total / crop.width;
+  // A black crop has no brightness to normalise: leave it at zero rather than divide by zero.
+  if (normalise_brightness && mean > 1e-6) {
+    const float gain = static_cast<float>(0.5 / mean);
+    for (float& p : profile) p *= gain;
+  }
+}
+
+namespace {
+
+cv::Rect ResolveCrop(int x_min, int x_max, int y_min, int y_max, cv::Size image, const char* name) {
+  const int x_end = x_max == -1 ? image.width : x_max;
+  const int y_end = y_max == -1 ? image.height : y_max;
+  if (x_end > image.width || y_end > image.height || x_min >= x_end || y_min >= y_end) {
+    throw std::invalid_argument(std::string(name) + " crop x [" + std::to_string(x_min) + ", " +
+                                std::to_string(x_end) + ") y [" + std::to_string(y_min) + ", " +
+                                std::to_string(y_end) + ") does not fit the " + std::to_string(image.width) + "x" +
+                                std::to_string(image.height) + " image");
+  }
+  return cv::Rect(x_min, y_min, x_end - x_min, y_end - y_min);
+}
+
+}  // namespace
+
+VisualOdometry::VisualOdometry(VisualOdometryConfig config) : config_(std::move(config)) { config_.Validate(); }
+
+void VisualOdometry::Reset() {
+  has_previous_ = false;
+  image_size_ = cv::Size(0, 0);
+}
+
+void VisualOdometry::CheckImage(const cv::Mat& grey) const {
+  if (grey.empty()) throw std::invalid_argument("VisualOdometry: empty image");
+  if (grey.type() != CV_8UC1) {
+    throw std::invalid_argument("VisualOdometry: image must be CV_8UC1 (grey), got type " +
+                                std::to_string(grey.type()));
+  }
+  if (has_previous_ && grey.size() != image_size_) {
+    throw std::invalid_argument("VisualOdometry: image size changed from " + std::to_string(image_size_.width) +
+                                "x" + std::to_string(image_size_.height) + " to " +
+                                std::to_string(grey.cols) + "x" + std::to_string(grey.rows));
+  }
+}
+
+Velocity VisualOdometry::Update(const cv::Mat& grey, double dt_s) {
+  CheckImage(grey);
+  if (!std::isfinite(dt_s) || dt_s <= 0.0) {
+    throw std::invalid_argument("VisualOdometry: dt must be finite and > 0, got " + std::to_string(dt_s));
+  }
+  if (!has_previous_) {
+    const cv::Size size = grey.size();
+    const cv::Rect vtrans_crop = ResolveCrop(config_.vtrans_image_x_min, config_.vtrans_image_x_max,
+                                             config_.vtrans_image_y_min, config_.vtrans_image_y_max, size, "vtrans");
+    const cv::Rect vrot_crop = ResolveCrop(config_.vrot_image_x_min, config_.vrot_image_x_max,
+                                           config_.vrot_image_y_min, config_.vrot_image_y_max, size, "vrot");
+    for (const cv::Rect& crop : {vtrans_crop, vrot_crop}) {
+      if (crop.width <= config_.min_overlap_px) {
+        throw std::invalid_argument("VisualOdometry: crop width " + std::to_string(crop.width) +
+                                    " must exceed min_overlap_px " + std::to_string(config_.min_overlap_px));
+      }
+    }
+    image_size_ = size;
+    vtrans_crop_ = vtrans_crop;
+    vrot_crop_ = vrot_crop;
+    ColumnIntensityProfile(grey, vtrans_crop_, config_.normalise_profile_brightness, vtrans_previous_);
+    ColumnIntensityProfile(grey, vrot_crop_, config_.normalise_profile_brightness, vrot_previous_);
+    has_previous_ = true;
+    return Velocity{};
+  }
+
+  ColumnIntensityProfile(grey, vtrans_crop_, config_.normalise_profile_brightness, vtrans_profile_);
+  ColumnIntensityProfile(grey, vrot_crop_, config_.normalise_profile_brightness, vrot_profile_);
+  const ProfileMatch rotation =
+      BestProfileShift(vrot_profile_, vrot_previous_, config_.max_shift_px, config_.min_overlap_px);
+  const ProfileMatch speed =
+      BestProfileShift(vtrans_profile_, vtrans_previous_, config_.max_shift_px, config_.min_overlap_px);
+  std::swap(vtrans_profile_, vtrans_previous_);
+  std::swap(vrot_profile_, vrot_previous_);
+
+  const double rad_per_px = config_.camera_fov_deg * std::numbers::pi / 180.0 / image_size_.width;
+  Velocity velocity;
+  velocity.rotation_shift_px = rotation.shift;
+  velocity.vrot = rotation.shift * rad_per_px / dt_s;
+  velocity.speed_difference = speed.difference;
+  const double moving_difference = std::max(speed.difference - config_.vtrans_noise_floor, 0.0);
+  velocity.vtrans =
+      std::min(moving_difference * config_.vtrans_scaling / (config_.camera_hz * dt_s), config_.vtrans_max);
+  return velocity;
+}
+
+}  // namespace rslam::odometry

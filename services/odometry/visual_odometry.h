@@ -1,0 +1,97 @@
+#pragma once
+// Visual odometry from column-intensity profiles (Milford & Wyeth 2008, paper 000 eqs. 4-7),
+// behaving like OpenRatSLAM's visual_odometry.
+//
+// Each frame, two crops of the grey image (one for rotation, one for speed) are reduced to 1-D
+// column-intensity profiles: column means of the crop, in [0, 1] (optionally rescaled to mean 0.5
+// so a global exposure change does not move the profile). Each profile is compared with the
+// previous frame's profile over shifts s by the mean absolute difference f(s) (eq. 4):
+//
+//   rotation:  s_m = argmin_s f(s) over the rotation profile (eq. 5, 7);
+//              dtheta = s_m * camera_fov / image_width;  vrot = dtheta / dt
+//   speed:     v = f(s_m) over the speed profile at its own best shift (eq. 6), then
+//              vtrans = min(max(v - vtrans_noise_floor, 0) * vtrans_scaling / (camera_hz * dt),
+//                           vtrans_max)
+//
+// At the nominal rate (dt = 1 / camera_hz) vtrans is exactly OpenRatSLAM's
+// min(v * vtrans_scaling, vtrans_max); a frame that arrives late (dropped frames) has seen
+// proportionally more image change, so dividing by dt keeps the speed, not the distance, right.
+// The noise floor makes a stationary camera report ~0 m/s (OpenRatSLAM drifts at standstill).
+//
+// Sign convention: shift s > 0 means the current profile is the previous one moved towards
+// larger x (scene moved right in the image), which is what a camera turning left
+// (counter-clockwise seen from above) sees. vrot > 0 is therefore a counter-clockwise turn
+// (right-handed, z up), as in ROS.
+//
+// Wheel odometry: this class only does vision. A node that has wheel odometry may publish wheel
+// velocities (vtrans, vrot) instead of, or blended with, these estimates; nothing downstream
+// cares where the velocity came from.
+//
+// Bad input (empty image, not CV_8UC1, size change mid-stream, crop outside the image, dt not
+// finite or <= 0) throws std::invalid_argument with the reason; the state is left unchanged.
+
+#include <opencv2/core.hpp>
+
+#include <span>
+#include <vector>
+
+#include "services/odometry/visual_odometry_config.h"
+
+namespace rslam::odometry {
+
+struct Velocity {
+  double vtrans = 0.0;        // m/s (perceptual speed, scaled), >= 0
+  double vrot = 0.0;          // rad/s, > 0 counter-clockwise
+  int rotation_shift_px = 0;  // s_m of the rotation profile (eq. 7)
+  double speed_difference = 0.0;  // v of eq. 6 before noise floor and scaling
+};
+
+// f(s) of eq. 4: mean absolute difference between current[n + s] and previous[n] over the
+// overlap of the two profiles (w - |s| entries). Profiles must have equal length > |s|.
+double ShiftedProfileDifference(std::span<const float> current, std::span<const float> previous, int shift);
+
+struct ProfileMatch {
+  int shift = 0;           // argmin_s f(s) (eq. 7); ties go to the smaller |s|
+  double difference = 0;   // f(shift) (eq. 6)
+};
+
+// Searches |s| <= max_shift with w - |s| > min_overlap, smallest |s| first so equal
+// differences prefer no motion.
+ProfileMatch BestProfileShift(std::span<const float> current, std::span<const float> previous, int max_shift,
+                              int min_overlap);
+
+// Column means of grey(y_min..y_max, x_min..x_max) divided by 255, written to profile
+// (resized to the crop width). With normalise_brightness the profile is rescaled to mean 0.5.
+void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, bool normalise_brightness,
+                            std::vector<float>& profile);
+
+class VisualOdometry {
+ public:
+  explicit VisualOdometry(VisualOdometryConfig config);  // throws ConfigError on a bad config
+  VisualOdometry(const VisualOdometry&) = delete;
+  VisualOdometry& operator=(const VisualOdometry&) = delete;
+  VisualOdometry(VisualOdometry&&) = default;
+
+  // Velocity between the previous frame and this one; the first frame (and the first after
+  // Reset) returns zero. grey: CV_8UC1, the same size every frame. dt_s: time since the
+  // previous frame, finite and > 0 (ignored for the first frame but still checked).
+  Velocity Update(const cv::Mat& grey, double dt_s);
+
+  // Forgets the previous frame and the image size (e.g. after a camera change).
+  void Reset();
+
+  const VisualOdometryConfig& config() const { return config_; }
+
+ private:
+  void CheckImage(const cv::Mat& grey) const;
+
+  const VisualOdometryConfig config_;
+  cv::Size image_size_{0, 0};  // fixed by the first frame
+  cv::Rect vtrans_crop_;
+  cv::Rect vrot_crop_;
+  bool has_previous_ = false;
+  std::vector<float> vtrans_profile_, vtrans_previous_;
+  std::vector<float> vrot_profile_, vrot_previous_;
+};
+
+}  // namespace rslam::odometry

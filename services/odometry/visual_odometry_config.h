@@ -1,0 +1,74 @@
+#pragma once
+// Configuration of VisualOdometry (YAML section `odometry:`). Key names follow OpenRatSLAM's
+// visual odometry settings so its published configurations carry over.
+
+#include <string>
+
+#include "common/config/config_error.h"
+
+namespace rslam::odometry {
+
+struct VisualOdometryConfig {
+  // Speed crop: the rows below the horizon change most with forward motion (St Lucia values).
+  int vtrans_image_x_min = 195;
+  int vtrans_image_x_max = 475;  // exclusive; -1 = image width
+  int vtrans_image_y_min = 270;
+  int vtrans_image_y_max = 430;  // exclusive; -1 = image height
+  // Rotation crop: the rows above the horizon, where distant scenery shifts only with rotation.
+  int vrot_image_x_min = 195;
+  int vrot_image_x_max = 475;
+  int vrot_image_y_min = 75;
+  int vrot_image_y_max = 240;
+  double camera_fov_deg = 53.0;  // horizontal field of view of the whole image
+  double camera_hz = 10.0;       // nominal frame rate the vtrans_scaling was tuned at
+  double vtrans_scaling = 1000.0;
+  double vtrans_max = 20.0;      // m/s
+  int max_shift_px = 40;         // shifts |s| <= max_shift_px are searched (OpenRatSLAM: 40)
+  int min_overlap_px = 30;       // a shift is tried only if w - |s| > min_overlap_px (000: |s| < w-30)
+  // Mean absolute profile difference that is sensor noise, not motion: subtracted before scaling.
+  double vtrans_noise_floor = 0.002;
+  // Scale each profile so its mean is 0.5: a global exposure change then moves no profile.
+  bool normalise_profile_brightness = true;
+
+  template <class V>
+  void VisitFields(V& v) {
+    v("vtrans_image_x_min", vtrans_image_x_min, "speed crop, first column");
+    v("vtrans_image_x_max", vtrans_image_x_max, "speed crop, one past the last column (-1 = image width)");
+    v("vtrans_image_y_min", vtrans_image_y_min, "speed crop, first row");
+    v("vtrans_image_y_max", vtrans_image_y_max, "speed crop, one past the last row (-1 = image height)");
+    v("vrot_image_x_min", vrot_image_x_min, "rotation crop, first column");
+    v("vrot_image_x_max", vrot_image_x_max, "rotation crop, one past the last column (-1 = image width)");
+    v("vrot_image_y_min", vrot_image_y_min, "rotation crop, first row");
+    v("vrot_image_y_max", vrot_image_y_max, "rotation crop, one past the last row (-1 = image height)");
+    v("camera_fov_deg", camera_fov_deg, "horizontal field of view of the full image, degrees");
+    v("camera_hz", camera_hz, "frame rate at which vtrans_scaling gives m/s (OpenRatSLAM camera_hz)");
+    v("vtrans_scaling", vtrans_scaling, "m/s per unit of mean profile difference at camera_hz");
+    v("vtrans_max", vtrans_max, "upper clamp of the speed, m/s");
+    v("max_shift_px", max_shift_px, "largest profile shift searched each way, pixels");
+    v("min_overlap_px", min_overlap_px, "minimum overlap of two shifted profiles, pixels");
+    v("vtrans_noise_floor", vtrans_noise_floor,
+      "profile difference treated as noise (subtracted before scaling), so standstill gives 0");
+    v("normalise_profile_brightness", normalise_profile_brightness,
+      "scale profiles to mean 0.5 so global brightness changes do not read as speed");
+  }
+
+  void Validate() const {
+    auto crop = [](int min, int max, const char* min_key, const char* max_key) {
+      Require(min >= 0, min_key, "must be >= 0");
+      Require(max == -1 || max > min, max_key, "must be -1 (image edge) or greater than " + std::string(min_key));
+    };
+    crop(vtrans_image_x_min, vtrans_image_x_max, "vtrans_image_x_min", "vtrans_image_x_max");
+    crop(vtrans_image_y_min, vtrans_image_y_max, "vtrans_image_y_min", "vtrans_image_y_max");
+    crop(vrot_image_x_min, vrot_image_x_max, "vrot_image_x_min", "vrot_image_x_max");
+    crop(vrot_image_y_min, vrot_image_y_max, "vrot_image_y_min", "vrot_image_y_max");
+    Require(camera_fov_deg > 0 && camera_fov_deg <= 360, "camera_fov_deg", "must be in (0, 360]");
+    Require(camera_hz > 0, "camera_hz", "must be positive");
+    Require(vtrans_scaling >= 0, "vtrans_scaling", "must be >= 0");
+    Require(vtrans_max >= 0, "vtrans_max", "must be >= 0");
+    Require(max_shift_px >= 0, "max_shift_px", "must be >= 0");
+    Require(min_overlap_px >= 1, "min_overlap_px", "must be >= 1");
+    Require(vtrans_noise_floor >= 0, "vtrans_noise_floor", "must be >= 0");
+  }
+};
+
+}  // namespace rslam::odometry

@@ -1,0 +1,352 @@
+#include "services/templates/template_library.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "services/templates/jeffrey_divergence.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace rslam::templates {
+
+namespace {
+
+constexpr uint32_t kFormatVersion = 1;
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// OpenRatSLAM's slack on the mean prefilter: template means are of the whole template, the
+// comparison is over a shifted window, so the gap is only approximately a lower bound.
+constexpr double kMeanPrefilterSlack = 0.005;
+
+// Sum of |a[i] - b[i]| over n bytes.
+inline uint32_t RowSad(const uint8_t* a, const uint8_t* b, int n) {
+  int i = 0;
+  uint32_t sum = 0;
+#if defined(__SSE2__)
+  __m128i acc = _mm_setzero_si128();
+  for (; i + 16 <= n; i += 16) {
+    const __m128i va = _mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i));
+    const __m128i vb = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + i));
+    acc = _mm_add_epi64(acc, _mm_sad_epu8(va, vb));
+  }
+  sum = static_cast<uint32_t>(_mm_cvtsi128_si32(acc)) +
+        static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_srli_si128(acc, 8)));
+#endif
+  for (; i < n; ++i) sum += static_cast<uint32_t>(std::abs(int(a[i]) - int(b[i])));
+  return sum;
+}
+
+double WrapAngle(double a) {
+  a = std::fmod(a, 2.0 * std::numbers::pi);
+  if (a > std::numbers::pi) a -= 2.0 * std::numbers::pi;
+  if (a <= -std::numbers::pi) a += 2.0 * std::numbers::pi;
+  return a;
+}
+
+TemplateConfig Validated(TemplateConfig config) {
+  config.Validate();
+  return config;
+}
+
+}  // namespace
+
+TemplateLibrary::TemplateLibrary(TemplateConfig config)
+    : config_(Validated(std::move(config))),
+      encoder_(config_),
+      histogram_mode_(config_.mode == "histogram"),
+      column_mode_(config_.mode == "column"),
+      width_(encoder_.width()),
+      height_(encoder_.height()),
+      template_size_(width_ * height_) {
+  if (histogram_mode_) {
+    dead_column_.assign(width_, 0);
+    for (int c : config_.dead_zone_columns) dead_column_[c] = 1;
+  } else if (config_.panoramic) {
+    for (int m = 0; m <= width_ / 2; m += config_.step_match) {
+      shifts_.push_back(m);
+      if (m != 0 && width_ - m != m) shifts_.push_back(-m);
+    }
+  } else {
+    for (int m = 0; m <= config_.shift_match; m += config_.step_match) {
+      shifts_.push_back(m);
+      if (m != 0) shifts_.push_back(-m);
+    }
+  }
+}
+
+uint32_t TemplateLibrary::Store(const EncodedView& view) {
+  if (size() >= std::numeric_limits<uint32_t>::max()) throw std::length_error("TemplateLibrary: too many templates");
+  const auto id = static_cast<uint32_t>(size());
+  pixels_.insert(pixels_.end(), view.pixels.begin(), view.pixels.end());
+  means_.push_back(view.mean);
+  if (histogram_mode_) {
+    histograms_.insert(histograms_.end(), view.histogram.begin(), view.histogram.end());
+    histogram_self_terms_.push_back(JeffreySelfTerm(view.histogram));
+  }
+  return id;
+}
+
+const uint8_t* TemplateLibrary::PrepareShiftedView(const EncodedView& view, std::vector<uint8_t>& buffer) const {
+  if (!config_.panoramic) return view.pixels.data();
+  // Each row twice, so every wrapped shift is one contiguous run.
+  buffer.resize(static_cast<std::size_t>(template_size_) * 2);
+  for (int y = 0; y < height_; ++y) {
+    const uint8_t* row = view.pixels.data() + static_cast<std::size_t>(y) * width_;
+    uint8_t* out = buffer.data() + static_cast<std::size_t>(y) * 2 * width_;
+    std::copy_n(row, width_, out);
+    std::copy_n(row, width_, out + width_);
+  }
+  return buffer.data();
+}
+
+double TemplateLibrary::TemplateDifference(const uint8_t* view_rows, uint32_t id, double bound,
+                                           int& best_shift) const {
+  const uint8_t* tmpl = pixels_.data() + static_cast<std::size_t>(id) * template_size_;
+  const int view_stride = config_.panoramic ? 2 * width_ : width_;
+  double best = kInfinity;
+  for (int s : shifts_) {
+    // Template columns [template_x0, template_x0 + length) against view columns shifted by s:
+    // the view's pixel at x + s is compared with the template's at x.
+    int template_x0, view_x0, length;
+    if (config_.panoramic) {
+      template_x0 = 0;
+      view_x0 = ((s % width_) + width_) % width_;
+      length = width_;
+    } else if (column_mode_) {  // paper 000 eq. 8: the whole w - |s| overlap
+      template_x0 = std::max(0, -s);
+      view_x0 = template_x0 + s;
+      length = width_ - std::abs(s);
+    } else {  // OpenRatSLAM: the view's centre window, a constant w - 2 * shift_match columns
+      template_x0 = config_.shift_match;
+      view_x0 = template_x0 + s;
+      length = width_ - 2 * config_.shift_match;
+    }
+    const double pixels = static_cast<double>(length) * height_;
+    const double cap = std::min(best, bound) * 255.0 * pixels;
+    const uint64_t limit = cap >= 4e18 ? std::numeric_limits<uint64_t>::max() : static_cast<uint64_t>(cap);
+    uint64_t sad = 0;
+    bool abandoned = false;
+    for (int y = 0; y < height_; ++y) {
+      sad += RowSad(tmpl + static_cast<std::size_t>(y) * width_ + template_x0,
+                    view_rows + static_cast<std::size_t>(y) * view_stride + view_x0, length);
+      if (sad > limit) {
+        abandoned = true;
+        break;
+      }
+    }
+    if (abandoned) continue;
+    const double difference = static_cast<double>(sad) / (255.0 * pixels);
+    if (difference < best) {
+      best = difference;
+      best_shift = s;
+    }
+  }
+  return best;
+}
+
+TemplateLibrary::Best TemplateLibrary::BestGridMatch(const EncodedView& view, bool prefilter) const {
+  Best best;
+  best.difference = kInfinity;
+  double smallest_mean_gap = kInfinity;
+  std::vector<uint8_t>& rows = const_cast<std::vector<uint8_t>&>(scratch_rows_);
+  const uint8_t* view_rows = PrepareShiftedView(view, rows);
+  const double gap_limit = config_.match_threshold + kMeanPrefilterSlack;
+  const auto count = static_cast<uint32_t>(size());
+  for (uint32_t id = 0; id < count; ++id) {
+    if (prefilter) {
+      const double gap = std::abs(static_cast<double>(view.mean) - means_[id]);
+      if (gap > gap_limit) {
+        smallest_mean_gap = std::min(smallest_mean_gap, gap);
+        continue;
+      }
+    }
+    int shift = 0;
+    const double difference = TemplateDifference(view_rows, id, best.difference, shift);
+    if (difference < best.difference) best = {id, shift, difference, true};
+  }
+  if (!best.found) best.difference = smallest_mean_gap;
+  return best;
+}
+
+double TemplateLibrary::RotationDifference(const EncodedView& view, uint32_t id, int& best_rotation) const {
+  const uint8_t* tmpl = pixels_.data() + static_cast<std::size_t>(id) * template_size_;
+  double best = kInfinity;
+  for (int r = 0; r < width_; ++r) {
+    // Rotating the template by r: view column x shows what template column x - r showed. The
+    // dead zone is fixed to the camera, so it is masked at x in the view and at x - r in the template.
+    uint64_t sad = 0;
+    int columns = 0;
+    for (int x = 0; x < width_; ++x) {
+      const int tx = (x - r + width_) % width_;
+      if (dead_column_[x] || dead_column_[tx]) continue;
+      ++columns;
+      for (int y = 0; y < height_; ++y) {
+        sad += static_cast<uint64_t>(std::abs(int(view.pixels[static_cast<std::size_t>(y) * width_ + x]) -
+                                              int(tmpl[static_cast<std::size_t>(y) * width_ + tx])));
+      }
+    }
+    if (columns == 0) continue;
+    const double difference = static_cast<double>(sad) / (255.0 * columns * height_);
+    if (difference < best) {
+      best = difference;
+      best_rotation = r;
+    }
+  }
+  return best;
+}
+
+TemplateLibrary::Best TemplateLibrary::BestHistogramMatch(const EncodedView& view, double& best_divergence) const {
+  const int bins = encoder_.histogram_bins();
+  const double self = JeffreySelfTerm(view.histogram);
+  std::vector<std::pair<double, uint32_t>> candidates;
+  best_divergence = kInfinity;
+  const auto count = static_cast<uint32_t>(size());
+  for (uint32_t id = 0; id < count; ++id) {
+    const std::span<const float> stored(histograms_.data() + static_cast<std::size_t>(id) * bins, bins);
+    const double d = JeffreyDivergenceFromSelfTerms(view.histogram, self, stored, histogram_self_terms_[id]);
+    best_divergence = std::min(best_divergence, d);
+    if (d <= config_.histogram_divergence_threshold) candidates.emplace_back(d, id);
+  }
+  const std::size_t keep = std::min<std::size_t>(candidates.size(), config_.histogram_max_candidates);
+  std::partial_sort(candidates.begin(), candidates.begin() + keep, candidates.end());
+  Best best;
+  double best_rotation_difference = kInfinity;
+  for (std::size_t i = 0; i < keep; ++i) {
+    int rotation = 0;
+    const double difference = RotationDifference(view, candidates[i].second, rotation);
+    if (difference < best_rotation_difference) {
+      best_rotation_difference = difference;
+      best = {candidates[i].second, rotation, candidates[i].first, true};
+    }
+  }
+  if (best.found && best_rotation_difference > config_.rotation_sad_threshold) best.found = false;
+  return best;
+}
+
+double TemplateLibrary::ShiftToAngle(int shift) const {
+  if (histogram_mode_ || config_.panoramic) return WrapAngle(shift * 2.0 * std::numbers::pi / width_);
+  return shift * (config_.crop_fov_deg * std::numbers::pi / 180.0) / width_;
+}
+
+ViewMatch TemplateLibrary::MatchOrLearn(const cv::Mat& grey) {
+  encoder_.Encode(grey, scratch_);
+  if (size() == 0) return {Store(scratch_), true, 0.0, kInfinity};
+  if (histogram_mode_) {
+    double best_divergence = kInfinity;
+    const Best best = BestHistogramMatch(scratch_, best_divergence);
+    if (best.found) return {best.id, false, ShiftToAngle(best.shift), best.difference};
+    return {Store(scratch_), true, 0.0, best_divergence};
+  }
+  const Best best = BestGridMatch(scratch_, config_.mean_prefilter);
+  if (best.found && best.difference <= config_.match_threshold) {
+    return {best.id, false, ShiftToAngle(best.shift), best.difference};
+  }
+  return {Store(scratch_), true, 0.0, best.difference};
+}
+
+uint32_t TemplateLibrary::Learn(const cv::Mat& grey) {
+  encoder_.Encode(grey, scratch_);
+  return Store(scratch_);
+}
+
+std::vector<double> TemplateLibrary::Differences(const cv::Mat& grey) const {
+  EncodedView view;
+  encoder_.Encode(grey, view);
+  std::vector<double> differences(size());
+  if (histogram_mode_) {
+    const int bins = encoder_.histogram_bins();
+    const double self = JeffreySelfTerm(view.histogram);
+    for (std::size_t id = 0; id < size(); ++id) {
+      const std::span<const float> stored(histograms_.data() + id * bins, bins);
+      differences[id] = JeffreyDivergenceFromSelfTerms(view.histogram, self, stored, histogram_self_terms_[id]);
+    }
+    return differences;
+  }
+  std::vector<uint8_t> rows;
+  const uint8_t* view_rows = PrepareShiftedView(view, rows);
+  for (std::size_t id = 0; id < size(); ++id) {
+    int shift = 0;
+    differences[id] = TemplateDifference(view_rows, static_cast<uint32_t>(id), kInfinity, shift);
+  }
+  return differences;
+}
+
+proto::TemplateLibraryState TemplateLibrary::ToProto() const {
+  proto::TemplateLibraryState state;
+  state.set_format_version(kFormatVersion);
+  state.set_mode(config_.mode);
+  state.set_width(static_cast<uint32_t>(width_));
+  state.set_height(static_cast<uint32_t>(height_));
+  state.set_histogram_bins(static_cast<uint32_t>(encoder_.histogram_bins()));
+  state.set_encoding(encoder_.description());
+  const int bins = encoder_.histogram_bins();
+  for (std::size_t id = 0; id < size(); ++id) {
+    proto::Template* t = state.add_templates();
+    t->set_id(static_cast<uint32_t>(id));
+    t->set_pixels(reinterpret_cast<const char*>(pixels_.data() + id * template_size_), template_size_);
+    if (histogram_mode_) {
+      const float* h = histograms_.data() + id * bins;
+      t->mutable_histogram()->Add(h, h + bins);
+    }
+  }
+  return state;
+}
+
+TemplateLibrary TemplateLibrary::FromProto(const proto::TemplateLibraryState& state, TemplateConfig config) {
+  TemplateLibrary library(std::move(config));
+  auto refuse = [](const std::string& reason) {
+    throw std::invalid_argument("TemplateLibrary state refused: " + reason);
+  };
+  if (state.format_version() != kFormatVersion) {
+    refuse("format_version " + std::to_string(state.format_version()) + ", expected " + std::to_string(kFormatVersion));
+  }
+  if (state.mode() != library.config_.mode) refuse("mode '" + state.mode() + "' but config has '" + library.config_.mode + "'");
+  if (state.width() != static_cast<uint32_t>(library.width_) || state.height() != static_cast<uint32_t>(library.height_)) {
+    refuse("templates are " + std::to_string(state.width()) + "x" + std::to_string(state.height()) + " but config makes " +
+           std::to_string(library.width_) + "x" + std::to_string(library.height_));
+  }
+  const int bins = library.encoder_.histogram_bins();
+  if (state.histogram_bins() != static_cast<uint32_t>(bins)) {
+    refuse("histogram_bins " + std::to_string(state.histogram_bins()) + " but config has " + std::to_string(bins));
+  }
+  if (state.encoding() != library.encoder_.description()) {
+    refuse("templates were made by '" + state.encoding() + "', config makes '" + library.encoder_.description() + "'");
+  }
+  EncodedView view;
+  for (int i = 0; i < state.templates_size(); ++i) {
+    const proto::Template& t = state.templates(i);
+    const std::string which = "template " + std::to_string(i);
+    if (t.id() != static_cast<uint32_t>(i)) refuse(which + " has id " + std::to_string(t.id()) + " (ids must be 0..N-1 in order)");
+    if (t.pixels().size() != static_cast<std::size_t>(library.template_size_)) {
+      refuse(which + " has " + std::to_string(t.pixels().size()) + " pixels, expected " +
+             std::to_string(library.template_size_));
+    }
+    view.pixels.assign(t.pixels().begin(), t.pixels().end());
+    uint32_t total = 0;
+    for (uint8_t p : view.pixels) total += p;
+    view.mean = static_cast<float>(total) / (255.0f * static_cast<float>(view.pixels.size()));
+    if (library.histogram_mode_) {
+      if (t.histogram_size() != bins) {
+        refuse(which + " has " + std::to_string(t.histogram_size()) + " histogram bins, expected " + std::to_string(bins));
+      }
+      double sum = 0;
+      for (float v : t.histogram()) {
+        if (!std::isfinite(v) || v < 0) refuse(which + " has a negative or non-finite histogram entry");
+        sum += v;
+      }
+      if (std::abs(sum - 1.0) > 1e-3) refuse(which + " histogram sums to " + std::to_string(sum) + ", not 1");
+      view.histogram.assign(t.histogram().begin(), t.histogram().end());
+    } else if (t.histogram_size() != 0) {
+      refuse(which + " has a histogram but mode is " + library.config_.mode);
+    }
+    library.Store(view);
+  }
+  return library;
+}
+
+}  // namespace rslam::templates

@@ -1,0 +1,116 @@
+#pragma once
+// The local view: a library of visual templates that recognises familiar views and learns new
+// ones. Three modes (TemplateConfig::mode):
+//
+//  column    Column-intensity arrays compared over shifts s (Milford & Wyeth 2008, paper 000
+//            eq. 8): f(k) = mean |I_{n+max(s,0)} - I^k_{n-min(s,0)}| over the w - |s| overlap,
+//            minimised over |s| <= shift_match; new template when min f(k) > match_threshold.
+//  patch     OpenRatSLAM's 2-D templates: the centre window (shift_match columns in from each
+//            side) of the view against the template shifted by |s| <= shift_match (or, with
+//            `panoramic`, every wrapped shift of the whole template); difference = mean
+//            absolute difference; new template above match_threshold.
+//  histogram Prasser et al. 2004 (paper 001): Jeffrey divergence (eq. 1) of the view's
+//            normalised grey histogram against every stored one; templates within
+//            histogram_divergence_threshold are candidates, refined by the mean absolute
+//            difference over all rotation_image_width rotations of the small panorama with the
+//            dead-zone columns of both images masked and normalised by the pixels compared.
+//            No candidate (or none within rotation_sad_threshold) -> new template.
+//
+// Intensities are in [0, 1]. `difference` and Differences() are in the mode's unit: mean
+// absolute difference (column, patch) or Jeffrey divergence (histogram). With an empty library
+// MatchOrLearn reports difference = +infinity.
+//
+// Relative angle: positive when the current view is the template's view with the scene moved
+// towards larger x, i.e. the robot has turned counter-clockwise (left) since the template was
+// learnt, assuming x increases clockwise around the robot (a forward camera; a panorama
+// unwrapped the same way). Non-panoramic: shift * crop_fov_deg / template_x_size; panoramic and
+// histogram: shift * 360 deg / width, wrapped to (-pi, pi]. In histogram mode the shift is the
+// rotation index r (0..35) of paper 001, recoverable as round(angle / 10 deg) mod 36.
+//
+// Speed: templates live in one contiguous 8-bit buffer; matching uses SSE2 sums of absolute
+// differences, stops a template as soon as its partial sum exceeds the best so far, and (patch
+// and column, MatchOrLearn only) skips templates whose precomputed mean differs from the view's
+// by more than match_threshold + 0.005 (OpenRatSLAM's prefilter). A difference reported for a
+// view above threshold is therefore exact only among templates not skipped.
+//
+// Deterministic; not thread-safe for concurrent mutation; bad images throw std::invalid_argument.
+
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "services/templates/local_view_activation.h"
+#include "services/templates/proto/template_library.pb.h"
+#include "services/templates/template_config.h"
+#include "services/templates/view_encoding.h"
+
+namespace rslam::templates {
+
+struct ViewMatch {
+  uint32_t template_id;        // the matched template, or the new one
+  bool is_new;                 // true when the view was learnt as a new template
+  double relative_angle_rad;   // 0 for a new template
+  double difference;           // to the matched template (or the best one, when new)
+};
+
+class TemplateLibrary {
+ public:
+  explicit TemplateLibrary(TemplateConfig config);  // throws ConfigError on a bad config
+  TemplateLibrary(const TemplateLibrary&) = delete;
+  TemplateLibrary& operator=(const TemplateLibrary&) = delete;
+  TemplateLibrary(TemplateLibrary&&) = default;
+
+  // Matches the view against every template; learns it when nothing is close enough.
+  ViewMatch MatchOrLearn(const cv::Mat& grey);
+  // Always stores the view as a new template; returns its id (ids are 0..N-1 in learning order).
+  uint32_t Learn(const cv::Mat& grey);
+  // Difference of the view to every template (index = id), exact (no prefilter), no learning.
+  std::vector<double> Differences(const cv::Mat& grey) const;
+
+  std::size_t size() const { return means_.size(); }
+  const TemplateConfig& config() const { return config_; }
+
+  proto::TemplateLibraryState ToProto() const;
+  // Throws std::invalid_argument when the state does not fit the config (mode, sizes, encoding)
+  // or is inconsistent (ids not dense, wrong pixel or histogram sizes, bad histogram values).
+  static TemplateLibrary FromProto(const proto::TemplateLibraryState& state, TemplateConfig config);
+
+ private:
+  struct Best {
+    uint32_t id = 0;
+    int shift = 0;
+    double difference = 0;
+    bool found = false;
+  };
+
+  uint32_t Store(const EncodedView& view);
+  // Prepares scratch_view_ (rows doubled when panoramic) from view.
+  const uint8_t* PrepareShiftedView(const EncodedView& view, std::vector<uint8_t>& buffer) const;
+  // Minimum over shifts of template `id`; abandons (returns > bound) once it exceeds `bound`.
+  double TemplateDifference(const uint8_t* view_rows, uint32_t id, double bound, int& best_shift) const;
+  Best BestGridMatch(const EncodedView& view, bool prefilter) const;
+  Best BestHistogramMatch(const EncodedView& view, double& best_divergence) const;
+  double RotationDifference(const EncodedView& view, uint32_t id, int& best_rotation) const;
+  double ShiftToAngle(int shift) const;
+
+  const TemplateConfig config_;
+  const ViewEncoder encoder_;
+  const bool histogram_mode_;
+  const bool column_mode_;
+  const int width_;
+  const int height_;
+  const int template_size_;
+  std::vector<int> shifts_;                 // tried in this order (smallest |s| first)
+  std::vector<uint8_t> dead_column_;        // histogram mode: 1 where the dead zone is
+
+  std::vector<uint8_t> pixels_;             // size() * template_size_
+  std::vector<float> means_;                // per template
+  std::vector<float> histograms_;           // histogram mode: size() * bins
+  std::vector<double> histogram_self_terms_;  // JeffreySelfTerm per template
+  EncodedView scratch_;                     // reused each frame: no per-frame allocation
+  std::vector<uint8_t> scratch_rows_;
+};
+
+}  // namespace rslam::templates

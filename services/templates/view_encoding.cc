@@ -1,0 +1,170 @@
+#include "services/templates/view_encoding.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace rslam::templates {
+
+namespace {
+
+std::string Describe(const TemplateConfig& c) {
+  std::ostringstream os;
+  os << c.mode << " crop x[" << c.image_crop_x_min << "," << c.image_crop_x_max << ") y[" << c.image_crop_y_min
+     << "," << c.image_crop_y_max << ")";
+  if (c.mode == "histogram") {
+    os << " bins " << c.histogram_bins << " stretch " << c.histogram_normalise_intensity << " rotation "
+       << c.rotation_image_width << "x" << c.rotation_image_height << " dead";
+    for (int d : c.dead_zone_columns) os << " " << d;
+  } else {
+    os << " size " << c.template_x_size << "x" << (c.mode == "column" ? 1 : c.template_y_size) << " norm "
+       << c.normalisation << " patch " << c.patch_normalisation << " minstd " << c.min_patch_normalisation_std;
+  }
+  return os.str();
+}
+
+uint8_t Quantise(float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); }
+
+}  // namespace
+
+ViewEncoder::ViewEncoder(const TemplateConfig& config)
+    : config_(config),
+      histogram_mode_(config.mode == "histogram"),
+      width_(histogram_mode_ ? config.rotation_image_width : config.template_x_size),
+      height_(histogram_mode_ ? config.rotation_image_height : (config.mode == "column" ? 1 : config.template_y_size)),
+      histogram_bins_(histogram_mode_ ? config.histogram_bins : 0),
+      description_(Describe(config)) {}
+
+cv::Rect ViewEncoder::ResolveCrop(const cv::Mat& grey) const {
+  if (grey.empty()) throw std::invalid_argument("TemplateLibrary: empty image");
+  if (grey.type() != CV_8UC1) {
+    throw std::invalid_argument("TemplateLibrary: image must be CV_8UC1 (grey), got type " +
+                                std::to_string(grey.type()));
+  }
+  const int x_end = config_.image_crop_x_max == -1 ? grey.cols : config_.image_crop_x_max;
+  const int y_end = config_.image_crop_y_max == -1 ? grey.rows : config_.image_crop_y_max;
+  if (x_end > grey.cols || y_end > grey.rows || config_.image_crop_x_min >= x_end ||
+      config_.image_crop_y_min >= y_end) {
+    throw std::invalid_argument("TemplateLibrary: crop x [" + std::to_string(config_.image_crop_x_min) + ", " +
+                                std::to_string(x_end) + ") y [" + std::to_string(config_.image_crop_y_min) + ", " +
+                                std::to_string(y_end) + ") does not fit the " + std::to_string(grey.cols) + "x" +
+                                std::to_string(grey.rows) + " image");
+  }
+  return cv::Rect(config_.image_crop_x_min, config_.image_crop_y_min, x_end - config_.image_crop_x_min,
+                  y_end - config_.image_crop_y_min);
+}
+
+void ViewEncoder::Encode(const cv::Mat& grey, EncodedView& out) const {
+  const cv::Mat crop = grey(ResolveCrop(grey));
+  if (histogram_mode_) {
+    EncodeHistogram(crop, out);
+  } else {
+    EncodeGrid(crop, out);
+  }
+  uint32_t total = 0;
+  for (uint8_t p : out.pixels) total += p;
+  out.mean = static_cast<float>(total) / (255.0f * static_cast<float>(out.pixels.size()));
+}
+
+void ViewEncoder::EncodeGrid(const cv::Mat& crop, EncodedView& out) const {
+  cv::Mat small;
+  cv::resize(crop, small, cv::Size(width_, height_), 0, 0, cv::INTER_AREA);
+  cv::Mat view;
+  small.convertTo(view, CV_32F, 1.0 / 255.0);
+  // OpenRatSLAM's vt_normalisation: a global gain so the mean is `normalisation`.
+  if (config_.normalisation > 0) {
+    const double mean = cv::mean(view)[0];
+    if (mean > 1e-6) {
+      view *= config_.normalisation / mean;
+      cv::min(view, 1.0, view);
+    }
+  }
+  // OpenRatSLAM's vt_patch_normalise: z-score over a (2r+1)^2 patch, edges clamped, mapped
+  // from [-3, 3] sigma to [0, 1].
+  if (config_.patch_normalisation > 0) {
+    const int r = config_.patch_normalisation;
+    const double count = (2.0 * r + 1) * (2.0 * r + 1);
+    cv::Mat normalised(view.size(), CV_32F);
+    for (int y = 0; y < height_; ++y) {
+      for (int x = 0; x < width_; ++x) {
+        double sum = 0, sum_sq = 0;
+        for (int py = y - r; py <= y + r; ++py) {
+          const float* row = view.ptr<float>(std::clamp(py, 0, height_ - 1));
+          for (int px = x - r; px <= x + r; ++px) {
+            const double v = row[std::clamp(px, 0, width_ - 1)];
+            sum += v;
+            sum_sq += v * v;
+          }
+        }
+        const double mean = sum / count;
+        const double stddev = std::sqrt(std::max(0.0, sum_sq / count - mean * mean));
+        float& result = normalised.at<float>(y, x);
+        if (stddev <= 1e-9 || stddev < config_.min_patch_normalisation_std) {
+          result = 0.5f;
+        } else {
+          result = static_cast<float>(((view.at<float>(y, x) - mean) / stddev + 3.0) / 6.0);
+        }
+      }
+    }
+    view = normalised;
+  }
+  out.pixels.resize(static_cast<std::size_t>(width_) * height_);
+  for (int y = 0; y < height_; ++y) {
+    const float* row = view.ptr<float>(y);
+    for (int x = 0; x < width_; ++x) out.pixels[static_cast<std::size_t>(y) * width_ + x] = Quantise(row[x]);
+  }
+  out.histogram.clear();
+}
+
+void ViewEncoder::EncodeHistogram(const cv::Mat& crop, EncodedView& out) const {
+  cv::Mat panorama = crop;
+  // Which crop columns are dead: a crop column belongs to rotation column c * W / crop_width.
+  std::vector<bool> dead_rotation_column(width_, false);
+  for (int c : config_.dead_zone_columns) dead_rotation_column[c] = true;
+  std::vector<bool> dead(crop.cols, false);
+  for (int x = 0; x < crop.cols; ++x) dead[x] = dead_rotation_column[static_cast<int64_t>(x) * width_ / crop.cols];
+
+  if (config_.histogram_normalise_intensity) {
+    int lo = 255, hi = 0;
+    for (int y = 0; y < crop.rows; ++y) {
+      const uint8_t* row = crop.ptr<uint8_t>(y);
+      for (int x = 0; x < crop.cols; ++x) {
+        if (dead[x]) continue;
+        lo = std::min<int>(lo, row[x]);
+        hi = std::max<int>(hi, row[x]);
+      }
+    }
+    if (hi > lo) {
+      cv::Mat stretched;
+      crop.convertTo(stretched, CV_8U, 255.0 / (hi - lo), -255.0 * lo / (hi - lo));
+      panorama = stretched;
+    }
+  }
+
+  out.histogram.assign(histogram_bins_, 0.0f);
+  std::vector<uint32_t> counts(histogram_bins_, 0);
+  uint32_t total = 0;
+  for (int y = 0; y < panorama.rows; ++y) {
+    const uint8_t* row = panorama.ptr<uint8_t>(y);
+    for (int x = 0; x < panorama.cols; ++x) {
+      if (dead[x]) continue;
+      ++counts[row[x] * histogram_bins_ / 256];
+      ++total;
+    }
+  }
+  for (int b = 0; b < histogram_bins_; ++b) {
+    out.histogram[b] = total ? static_cast<float>(counts[b]) / static_cast<float>(total) : 0.0f;
+  }
+
+  cv::Mat small;
+  cv::resize(panorama, small, cv::Size(width_, height_), 0, 0, cv::INTER_AREA);
+  out.pixels.resize(static_cast<std::size_t>(width_) * height_);
+  for (int y = 0; y < height_; ++y) {
+    std::copy_n(small.ptr<uint8_t>(y), width_, out.pixels.data() + static_cast<std::size_t>(y) * width_);
+  }
+}
+
+}  // namespace rslam::templates
