@@ -24,7 +24,7 @@ inline bool IsBgr(const std::vector<int>& c) {
 
 // How the occupancy map is turned into a 3-D scene.
 struct SceneConfig {
-  double wall_height_m = 1.0;
+  double wall_height_m = 2.0;  // a room: tall enough that near walls fill the upper image
   // The floor is ONE uniform colour so a floor segmenter seeded on it is exact (paper 003).
   std::vector<int> floor_bgr = {70, 110, 150};
   std::vector<int> ceiling_bgr = {235, 225, 215};
@@ -58,10 +58,11 @@ struct CameraConfig {
   int height = 240;
   double horizontal_fov_rad = 60.0 * M_PI / 180.0;  // paper 003's camera: 60 degrees
   double height_m = 0.3;                             // optical centre above the floor
-  double tilt_rad = 0.35;                            // down positive (paper 003 tilts down)
-  // Panoramic mode (paper 001 local view): columns cover 360 degrees (column 0 looks straight
-  // ahead, azimuth increasing to the left), rows cover vertical_fov_rad around the tilted
-  // horizon; columns whose azimuth is inside the dead zone are black.
+  double tilt_rad = 0.3;                             // down positive (paper 003 tilts down)
+  // Panoramic mode (paper 001 local view): columns cover 360 degrees, the centre column looking
+  // straight ahead and azimuth decreasing to the right as in a forward camera (the left edge looks
+  // behind); rows cover vertical_fov_rad around the tilted horizon; columns whose azimuth is inside
+  // the dead zone are black.
   bool panoramic = false;
   double vertical_fov_rad = 40.0 * M_PI / 180.0;  // panoramic mode only
   double dead_zone_center_rad = M_PI;              // panoramic mode only (behind the robot)
