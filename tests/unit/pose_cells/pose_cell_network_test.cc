@@ -1,0 +1,364 @@
+// Pins the pose-cell network's dynamics (against a dense OpenRatSLAM-style reference), its path
+// integration, view injection (001 eqs. 3-4), the explicit-id action sequence and persistence.
+#include "services/pose_cells/pose_cell_network.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <vector>
+
+namespace rslam::pose_cells {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+PoseCellConfig SmallConfig() {
+  PoseCellConfig c;  // OpenRatSLAM defaults: 21 x 21 x 36
+  return c;
+}
+
+double CircularDistance(double a, double b, double n) {
+  double d = std::fmod(std::abs(a - b), n);
+  return std::min(d, n - d);
+}
+
+// Number of cells that are strict local maxima over their 26 wrapped neighbours.
+int CountPeaks(const PoseCellNetwork& net) {
+  const int n = net.config().pc_dim_xy, m = net.config().pc_dim_th;
+  int peaks = 0;
+  for (int t = 0; t < m; ++t)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        const float v = net.Activity(x, y, t);
+        if (v <= 1e-4f) continue;
+        bool is_max = true;
+        for (int dt = -1; dt <= 1 && is_max; ++dt)
+          for (int dy = -1; dy <= 1 && is_max; ++dy)
+            for (int dx = -1; dx <= 1 && is_max; ++dx) {
+              if (!dx && !dy && !dt) continue;
+              if (net.Activity((x + dx + n) % n, (y + dy + n) % n, (t + dt + m) % m) >= v) is_max = false;
+            }
+        peaks += is_max;
+      }
+  return peaks;
+}
+
+// Dense reference: OpenRatSLAM's excite / inhibit / global inhibit / normalise with full 3-D
+// kernels exp(-|r|^2 / (2 var^2)) normalised over the cube, in double precision.
+struct DenseReference {
+  int n, m;
+  std::vector<double> a;
+  double At(int x, int y, int t) const { return a[(static_cast<size_t>(t) * n + y) * n + x]; }
+  std::vector<double> Kernel(int dim, double var) const {
+    std::vector<double> k(dim * dim * dim);
+    double total = 0;
+    const int c = dim / 2;
+    for (int t = 0; t < dim; ++t)
+      for (int y = 0; y < dim; ++y)
+        for (int x = 0; x < dim; ++x) {
+          const double r2 = (x - c) * (x - c) + (y - c) * (y - c) + (t - c) * (t - c);
+          total += k[(t * dim + y) * dim + x] = std::exp(-r2 / (2 * var * var));
+        }
+    for (double& v : k) v /= total;
+    return k;
+  }
+  std::vector<double> Spread(const std::vector<double>& in, int dim, double var) const {
+    const std::vector<double> k = Kernel(dim, var);
+    std::vector<double> out(in.size(), 0.0);
+    const int c = dim / 2;
+    for (int t = 0; t < m; ++t)
+      for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+          const double v = in[(static_cast<size_t>(t) * n + y) * n + x];
+          if (v == 0) continue;
+          for (int kt = 0; kt < dim; ++kt)
+            for (int ky = 0; ky < dim; ++ky)
+              for (int kx = 0; kx < dim; ++kx) {
+                const int xx = ((x + kx - c) % n + n) % n, yy = ((y + ky - c) % n + n) % n,
+                          tt = ((t + kt - c) % m + m) % m;
+                out[(static_cast<size_t>(tt) * n + yy) * n + xx] += v * k[(kt * dim + ky) * dim + kx];
+              }
+        }
+    return out;
+  }
+  void Step(const PoseCellConfig& cfg) {
+    std::vector<double> e = Spread(a, cfg.pc_w_e_dim, cfg.pc_w_e_var);
+    std::vector<double> i = Spread(e, cfg.pc_w_i_dim, cfg.pc_w_i_var);
+    double total = 0;
+    for (size_t j = 0; j < a.size(); ++j) {
+      double v = e[j] - i[j];
+      v = v >= cfg.pc_global_inhib ? v - cfg.pc_global_inhib : 0.0;
+      a[j] = v;
+      total += v;
+    }
+    for (double& v : a) v /= total;
+  }
+};
+
+TEST(PoseCellNetwork, KernelWeightsMatchHandComputedGaussians) {
+  PoseCellNetwork net(SmallConfig());
+  // Excitation, 7 taps, var 1: exp(-k^2/2) for k = 0, 1, 2, 3 over their sum 2.505948.
+  const auto& e = net.excite_weights();
+  ASSERT_EQ(e.size(), 7u);
+  EXPECT_NEAR(e[3], 1.0 / 2.505948, 1e-6);
+  EXPECT_NEAR(e[4], 0.606531 / 2.505948, 1e-6);
+  EXPECT_NEAR(e[5], 0.135335 / 2.505948, 1e-6);
+  EXPECT_NEAR(e[6], 0.011109 / 2.505948, 1e-6);
+  EXPECT_FLOAT_EQ(e[0], e[6]);
+  // Inhibition, 5 taps, var 2: exp(-k^2/8) for k = 0, 1, 2 over their sum 3.978056.
+  const auto& i = net.inhibit_weights();
+  ASSERT_EQ(i.size(), 5u);
+  EXPECT_NEAR(i[2], 1.0 / 3.978056, 1e-6);
+  EXPECT_NEAR(i[3], 0.882497 / 3.978056, 1e-6);
+  EXPECT_NEAR(i[4], 0.606531 / 3.978056, 1e-6);
+}
+
+TEST(PoseCellNetwork, StartsWithAllActivityInTheCentreCell) {
+  PoseCellNetwork net(SmallConfig());
+  EXPECT_FLOAT_EQ(net.Activity(10, 10, 18), 1.0f);
+  EXPECT_EQ(net.ActiveCellCount(), 1);
+}
+
+TEST(PoseCellNetwork, AttractorDynamicsMatchDenseReference) {
+  const PoseCellConfig cfg = SmallConfig();
+  PoseCellNetwork net(cfg);
+  net.InjectEnergy(1, 19, 34, 0.6);  // a second packet across the wrap in every dimension
+  DenseReference ref{cfg.pc_dim_xy, cfg.pc_dim_th, {}};
+  ref.a.assign(static_cast<size_t>(cfg.pc_dim_xy) * cfg.pc_dim_xy * cfg.pc_dim_th, 0.0);
+  ref.a[(18u * 21 + 10) * 21 + 10] = 1.0;
+  ref.a[(34u * 21 + 19) * 21 + 1] = 0.6;
+  for (int step = 0; step < 4; ++step) {
+    net.ExciteInhibitNormalise();
+    ref.Step(cfg);
+    double max_err = 0;
+    for (int t = 0; t < 36; ++t)
+      for (int y = 0; y < 21; ++y)
+        for (int x = 0; x < 21; ++x)
+          max_err = std::max(max_err, std::abs(net.Activity(x, y, t) - ref.At(x, y, t)));
+    EXPECT_LT(max_err, 1e-6) << "step " << step;
+  }
+}
+
+TEST(PoseCellNetwork, ActivityStaysNormalisedToOne) {
+  PoseCellNetwork net(SmallConfig());
+  for (int i = 0; i < 100; ++i) {
+    net.Step(0.37, 0.11, 0.1);
+    ASSERT_NEAR(net.TotalActivity(), 1.0, 1e-4) << "step " << i;
+  }
+}
+
+TEST(PoseCellNetwork, SinglePacketStaysSinglePacketWhileMoving) {
+  PoseCellNetwork net(SmallConfig());
+  for (int i = 0; i < 200; ++i) net.Step(0.8, 0.05, 1.0);
+  EXPECT_EQ(CountPeaks(net), 1);
+  EXPECT_LT(net.ActiveCellCount(), 400);  // compact, not smeared over the 15876 cells
+}
+
+TEST(PoseCellNetwork, PacketMovesForwardUnderPathIntegration) {
+  PoseCellNetwork net(SmallConfig());
+  for (int i = 0; i < 20; ++i) net.Step(0.0, 0.0, 0.1);  // settle the packet
+  const PoseCellPosition start = net.UpdateBestPose();
+  // Layer 18 faces pi: moving 0.5 m per step with 1 m cells moves the packet -x.
+  for (int i = 0; i < 8; ++i) net.Step(0.5, 0.0, 1.0);
+  const PoseCellPosition end = net.BestPose();
+  EXPECT_NEAR(CircularDistance(end.x, start.x - 4.0, 21), 0.0, 0.3);
+  EXPECT_NEAR(CircularDistance(end.y, start.y, 21), 0.0, 0.1);
+  EXPECT_NEAR(CircularDistance(end.th, start.th, 36), 0.0, 0.1);
+}
+
+TEST(PoseCellNetwork, PathIntegrationWrapsAroundInXAndY) {
+  PoseCellNetwork net(SmallConfig());
+  // Turn the packet to layer 9 (pi/2, +y)... then drive 15 cells: 10 + 15 = 25 -> 4.
+  net.Step(0.0, -9 * 2 * kPi / 36, 1.0);
+  EXPECT_NEAR(CircularDistance(net.BestPose().th, 9.0, 36), 0.0, 0.1);
+  for (int i = 0; i < 15; ++i) net.Step(1.0, 0.0, 1.0);
+  EXPECT_NEAR(CircularDistance(net.BestPose().y, 4.0, 21), 0.0, 0.5);
+  EXPECT_NEAR(CircularDistance(net.BestPose().x, 10.0, 21), 0.0, 0.5);
+}
+
+TEST(PoseCellNetwork, RotationShiftsThetaAndWrapsAround) {
+  PoseCellNetwork net(SmallConfig());
+  const double cell = 2 * kPi / 36;
+  // 2.5 cells per step for 8 steps: 18 + 20 = 38 -> 2.
+  for (int i = 0; i < 8; ++i) net.Step(0.0, 2.5 * cell, 1.0);
+  EXPECT_NEAR(CircularDistance(net.BestPose().th, 2.0, 36), 0.0, 0.2);
+  EXPECT_NEAR(net.BestPose().x, 10.0, 1e-6);
+}
+
+TEST(PoseCellNetwork, ViewInjectionAppliesOrientationOffset) {
+  PoseCellConfig cfg = SmallConfig();
+  cfg.vt_inject_min_age = 0;
+  PoseCellNetwork net(cfg);
+  const double cell = 2 * kPi / 36;
+  // 001 eq. 3: a new view seen with offset gamma = 3 cells is associated with theta - gamma.
+  net.InjectView(0, 3 * cell, true);
+  EXPECT_NEAR(net.SaveState().views(0).pc_th(), 15.0, 1e-9);
+  // 001 eq. 4: seen again with gamma = 5 cells, it injects at theta' + gamma = 20.
+  const float before = net.Activity(10, 10, 20);
+  net.InjectView(0, 5 * cell, false);
+  const double energy = 0.15 * (30.0 - std::exp(1.2 * 2.0)) / 30.0;  // decay 1 + 1 (repeat)
+  EXPECT_NEAR(net.Activity(10, 10, 20) - before, energy, 1e-6);
+  EXPECT_FLOAT_EQ(net.Activity(10, 10, 15), 0.0f);
+}
+
+TEST(PoseCellNetwork, RepeatedInjectionOfTheSameViewDecays) {
+  PoseCellConfig cfg = SmallConfig();
+  cfg.vt_inject_min_age = 0;
+  PoseCellNetwork net(cfg);
+  net.InjectView(0, 0.0, true);
+  auto inject = [&](uint32_t id) {
+    const float before = net.Activity(10, 10, 18);
+    net.InjectView(id, 0.0, false);
+    return net.Activity(10, 10, 18) - before;
+  };
+  // Decay 1 -> 2 on the first repeat: energy 0.15 (30 - e^2.4) / 30.
+  EXPECT_NEAR(inject(0), 0.15 * (30.0 - std::exp(2.4)) / 30.0, 1e-6);
+  EXPECT_EQ(inject(0), 0.0f);  // decay 2.95: e^(1.2 decay) > 30, the view is silenced
+  EXPECT_EQ(inject(0), 0.0f);
+  // Other views for a while restore the decay (pc_vt_restore per view update).
+  net.InjectView(1, 0.0, true);
+  for (int i = 0; i < 60; ++i) net.InjectView(1, 0.0, false);
+  EXPECT_NEAR(inject(0), 0.15 * (30.0 - std::exp(1.2)) / 30.0, 1e-6);
+}
+
+TEST(PoseCellNetwork, RepeatedViewsElsewhereWinOverThePacket) {
+  PoseCellNetwork net(SmallConfig());
+  // Learn views 0 and 1 at the start pose, then drive 6 cells away learning new views.
+  uint32_t next = 0;
+  net.ProcessFrame(0.0, 0.0, 1.0, next++, true, 0.0);
+  net.ProcessFrame(0.0, 0.0, 1.0, next++, true, 0.0);
+  for (int i = 0; i < 6; ++i) net.ProcessFrame(1.0, 0.0, 1.0, next++, true, 0.0);
+  for (int i = 0; i < 6; ++i) net.ProcessFrame(0.0, 0.0, 1.0, next++, true, 0.0);
+  ASSERT_NEAR(CircularDistance(net.BestPose().x, 4.0, 21), 0.0, 0.5);
+  // Now the robot sees the start views again (alternating, so neither decays).
+  for (int i = 0; i < 60; ++i) net.ProcessFrame(0.0, 0.0, 1.0, i % 2, false, 0.0);
+  EXPECT_NEAR(CircularDistance(net.BestPose().x, 10.0, 21), 0.0, 0.5);
+  EXPECT_EQ(CountPeaks(net), 1);
+}
+
+// Drives a square of side 6 cells and comes back to the first view.
+struct SquareDrive {
+  std::vector<Action> actions;
+  void Run(PoseCellNetwork& net) {
+    const double quarter = kPi / 2;
+    uint32_t next_template = 0;
+    auto frame = [&](double v, double w, uint32_t tid, bool is_new) {
+      const Action a = net.ProcessFrame(v, w, 1.0, tid, is_new, 0.0);
+      if (a.kind != Action::Kind::kNone) actions.push_back(a);
+    };
+    for (int side = 0; side < 4; ++side) {
+      for (int i = 0; i < 3; ++i) frame(2.0, 0.0, next_template++, true);
+      frame(0.0, quarter, next_template++, true);
+    }
+    frame(2.0, 0.0, 0, false);  // back along the first side: the first view again
+    frame(2.0, 0.0, 1, false);  // and the view after it, along the known path
+  }
+};
+
+TEST(PoseCellNetwork, SquareLoopEmitsCreatesThenLinkToFirstExperience) {
+  PoseCellConfig cfg = SmallConfig();
+  cfg.pc_cell_x_size = 1.0;
+  PoseCellNetwork net(cfg);
+  SquareDrive drive;
+  drive.Run(net);
+  ASSERT_EQ(drive.actions.size(), 18u);
+  for (uint32_t i = 0; i < 16; ++i) {
+    const Action& a = drive.actions[i];
+    EXPECT_EQ(a.kind, Action::Kind::kCreate) << i;
+    EXPECT_EQ(a.experience_id, i);
+    EXPECT_EQ(a.from_experience_id, i == 0 ? kNoExperience : i - 1);
+    EXPECT_EQ(a.template_id, i);
+  }
+  const Action& closure = drive.actions[16];
+  EXPECT_EQ(closure.kind, Action::Kind::kLink);
+  EXPECT_EQ(closure.from_experience_id, 15u);
+  EXPECT_EQ(closure.experience_id, 0u);
+  const Action& along = drive.actions[17];
+  EXPECT_EQ(along.kind, Action::Kind::kSet);  // 0 -> 1 was linked when 1 was created
+  EXPECT_EQ(along.from_experience_id, 0u);
+  EXPECT_EQ(along.experience_id, 1u);
+  for (size_t i = 0; i < drive.actions.size(); ++i) EXPECT_EQ(drive.actions[i].sequence, i);
+}
+
+TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
+  PoseCellNetwork a(SmallConfig());
+  uint32_t next = 0;
+  auto frame_input = [&](int i, uint32_t& tid, bool& is_new) {
+    if (i % 7 == 3 && next > 12) {
+      tid = (i * 5) % (next - 11);
+      is_new = false;
+    } else {
+      tid = next++;
+      is_new = true;
+    }
+  };
+  for (int i = 0; i < 60; ++i) {
+    uint32_t tid;
+    bool is_new;
+    frame_input(i, tid, is_new);
+    a.ProcessFrame(0.6 + 0.1 * std::sin(i), 0.2 * std::cos(0.3 * i), 0.1 * (1 + i % 3), tid, is_new, 0.05 * (i % 4));
+  }
+  PoseCellNetwork b(SmallConfig());
+  b.LoadState(a.SaveState());
+  EXPECT_EQ(b.SaveState().SerializeAsString(), a.SaveState().SerializeAsString());
+  for (int i = 60; i < 160; ++i) {
+    uint32_t tid;
+    bool is_new;
+    frame_input(i, tid, is_new);
+    const double v = 0.6 + 0.1 * std::sin(i), w = 0.2 * std::cos(0.3 * i), dt = 0.1 * (1 + i % 3);
+    const Action x = a.ProcessFrame(v, w, dt, tid, is_new, 0.05 * (i % 4));
+    const Action y = b.ProcessFrame(v, w, dt, tid, is_new, 0.05 * (i % 4));
+    ASSERT_EQ(x.kind, y.kind) << i;
+    ASSERT_EQ(x.experience_id, y.experience_id) << i;
+    ASSERT_EQ(x.from_experience_id, y.from_experience_id) << i;
+    ASSERT_EQ(x.sequence, y.sequence) << i;
+  }
+  EXPECT_EQ(a.BestPose().x, b.BestPose().x);
+  EXPECT_GT(a.experience_count(), 10u);
+}
+
+TEST(PoseCellNetwork, RejectsNonFiniteInputAndTemplateIdJumps) {
+  PoseCellNetwork net(SmallConfig());
+  net.ProcessFrame(0.1, 0.0, 0.1, 0, true, 0.0);
+  const std::string before = net.SaveState().SerializeAsString();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(net.ProcessFrame(nan, 0.0, 0.1, 1, true, 0.0), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, inf, 0.1, 1, true, 0.0), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, -0.1, 1, true, 0.0), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, nan, 1, true, 0.0), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, nan), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 5, true, 0.0), std::invalid_argument);
+  EXPECT_EQ(net.SaveState().SerializeAsString(), before);
+  EXPECT_NO_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, 0.0));
+}
+
+TEST(PoseCellNetwork, LoadRefusesStateOfOtherDimensionsOrInconsistentIds) {
+  PoseCellNetwork a(SmallConfig());
+  a.ProcessFrame(0.1, 0.0, 0.1, 0, true, 0.0);
+  PoseCellConfig big = SmallConfig();
+  big.pc_dim_xy = 30;
+  PoseCellNetwork b(big);
+  EXPECT_THROW(b.LoadState(a.SaveState()), std::invalid_argument);
+  proto::State bad = a.SaveState();
+  bad.mutable_experiences(0)->set_template_id(7);
+  PoseCellNetwork c(SmallConfig());
+  EXPECT_THROW(c.LoadState(bad), std::invalid_argument);
+}
+
+TEST(PoseCellNetwork, ConfigValidationNamesTheKey) {
+  PoseCellConfig c;
+  c.pc_w_e_dim = 6;
+  try {
+    c.Validate();
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.key(), "pc_w_e_dim");
+  }
+}
+
+}  // namespace
+}  // namespace rslam::pose_cells
