@@ -1,0 +1,27 @@
+#pragma once
+// `rslam eval`: evaluation subcommands.
+//
+//   rslam eval vpr --reference DIR --query DIR [--tolerance N] [--sequence L]
+//                  [--contrast-window W] [--preset P | --config FILE] [--matcher template|baseline]
+//                  [--limit N] [--json]
+//     Visual place recognition on frame-aligned image sets (same file name = same place),
+//     prints recall@1 and recall@100%precision (vpr_evaluation.h).
+//   rslam eval trajectory --estimate FILE.csv --ground-truth FILE.csv [--no-scale]
+//                         [--max-stamp-gap-ms T] [--json]
+//     Absolute trajectory error after similarity alignment (trajectory_alignment.h); CSV format
+//     in trajectory_csv.h (stamp_ns,x,y[,theta]).
+//
+// Failures (unreadable input, bad config) throw CLI::RuntimeError with the reason, exit code 1.
+
+#include <CLI/CLI.hpp>
+
+#include <ostream>
+
+namespace rslam::eval {
+
+// Adds `eval` with subcommands `vpr` and `trajectory` to the rslam app; results go to out.
+void RegisterEvalCommand(CLI::App& rslam, std::ostream& out);
+// Results go to std::cout.
+void RegisterEvalCommand(CLI::App& rslam);
+
+}  // namespace rslam::eval
