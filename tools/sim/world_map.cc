@@ -350,15 +350,21 @@ Pose2D WorldMap::DefaultStartPose() const {
   for (int l = 2; l < n; ++l) {
     if (stats.at<int>(l, cv::CC_STAT_AREA) > stats.at<int>(best_label, cv::CC_STAT_AREA)) best_label = l;
   }
+  // Farthest from walls; among equally far cells (a corridor's centre line) the one nearest the
+  // region's centroid, then the lowest (iy, ix), so the choice is deterministic and central.
   const std::vector<float> dist = DistanceToWalls();
+  const double cx = centroids.at<double>(best_label, 0), cy = centroids.at<double>(best_label, 1);
   float best = -1;
+  double best_to_centroid = 0;
   Eigen::Vector2i best_cell(0, 0);
   for (int iy = 0; iy < height_; ++iy) {
     for (int ix = 0; ix < width_; ++ix) {
       if (labels.at<int>(iy, ix) != best_label) continue;
       const float d = dist[static_cast<size_t>(iy) * width_ + ix];
-      if (d > best) {
-        best = d;
+      const double to_centroid = std::hypot(ix - cx, iy - cy);
+      if (d > best + 1e-4f || (d > best - 1e-4f && to_centroid < best_to_centroid - 1e-9)) {
+        best = std::max(best, d);
+        best_to_centroid = to_centroid;
         best_cell = Eigen::Vector2i(ix, iy);
       }
     }

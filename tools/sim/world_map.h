@@ -81,7 +81,7 @@ class WorldMap {
   std::vector<Eigen::Vector2i> ReachableFreeCells(const Eigen::Vector2d& start) const;
 
   // A deterministic sensible start: the free cell farthest from any wall within the largest
-  // 4-connected free region (ties: lowest iy, then lowest ix), heading theta = 0.
+  // 4-connected free region (ties: nearest the region's centroid, then lowest iy, ix), heading 0.
   Pose2D DefaultStartPose() const;
 
   // Per-cell distance (m) to the nearest wall cell centre; row-major, iy = 0 bottom.
