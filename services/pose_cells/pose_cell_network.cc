@@ -59,6 +59,9 @@ PoseCellNetwork::PoseCellNetwork(const PoseCellConfig& config)
   buf_a_.assign(cells, 0.0f);
   buf_b_.assign(cells, 0.0f);
   buf_c_.assign(cells, 0.0f);
+  for (RowFlags* r : {&rows_act_, &rows_a_, &rows_b_, &rows_c_}) {
+    r->assign(static_cast<size_t>(dim_xy_) * dim_th_, 0);
+  }
   for (AxisSet* s : {&xs_, &ys_, &ex_xs_, &ex_ys_, &tmp_xs_, &tmp_ys_}) {
     s->Reset(dim_xy_);
     s->index.reserve(dim_xy_);
@@ -89,9 +92,7 @@ void PoseCellNetwork::Dilate(const AxisSet& in, int n, int lo, int hi, AxisSet& 
       for (int d = -lo; d <= hi; ++d) out.member[Wrap(i + d, n)] = 1;
     }
   }
-  for (int i = 0; i < n; ++i) {
-    if (out.member[i]) out.index.push_back(i);
-  }
+  out.Finish();
 }
 
 void PoseCellNetwork::ZeroRegion(std::vector<float>& buf, const AxisSet& xs, const AxisSet& ys,
@@ -99,7 +100,7 @@ void PoseCellNetwork::ZeroRegion(std::vector<float>& buf, const AxisSet& xs, con
   for (int t : ts.index) {
     for (int y : ys.index) {
       float* row = &buf[Flat(0, y, t)];
-      for (int x : xs.index) row[x] = 0.0f;
+      for (auto [b, e] : xs.runs) std::fill(row + b, row + e, 0.0f);
     }
   }
 }
@@ -112,23 +113,21 @@ void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, con
   for (int t : ts.index) {
     for (int y : ys.index) {
       const float* row = &activity_[Flat(0, y, t)];
-      for (int x : xs.index) {
-        if (row[x] != 0.0f) {
-          xs_.member[x] = ys_.member[y] = ts_.member[t] = 1;
+      bool any = false;
+      for (auto [b, e] : xs.runs) {
+        for (int x = b; x < e; ++x) {
+          const bool nz = row[x] != 0.0f;
+          xs_.member[x] |= nz;
+          any |= nz;
         }
       }
+      rows_act_[Row(y, t)] = any;
+      if (any) ys_.member[y] = ts_.member[t] = 1;
     }
   }
-  xs_.index.clear();
-  ys_.index.clear();
-  ts_.index.clear();
-  for (int i = 0; i < dim_xy_; ++i) {
-    if (xs_.member[i]) xs_.index.push_back(i);
-    if (ys_.member[i]) ys_.index.push_back(i);
-  }
-  for (int i = 0; i < dim_th_; ++i) {
-    if (ts_.member[i]) ts_.index.push_back(i);
-  }
+  xs_.Finish();
+  ys_.Finish();
+  ts_.Finish();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -136,30 +135,41 @@ void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, con
 // reads outside it reads zeros; output buffers are zero on entry (all scratch buffers are kept
 // clean), so passes may accumulate.
 
-void PoseCellNetwork::ConvolveX(const std::vector<float>& in, std::vector<float>& out,
+void PoseCellNetwork::ConvolveX(const std::vector<float>& in, const RowFlags& in_rows,
+                                std::vector<float>& out, RowFlags& out_rows,
                                 const std::vector<float>& w, const AxisSet& xs_out,
                                 const AxisSet& ys, const AxisSet& ts) const {
   const int k_dim = static_cast<int>(w.size());
   const int c = k_dim / 2;
+  const int n = dim_xy_;
   for (int t : ts.index) {
     for (int y : ys.index) {
+      out_rows[Row(y, t)] = in_rows[Row(y, t)];
+      if (!in_rows[Row(y, t)]) continue;
       const float* src = &in[Flat(0, y, t)];
       float* dst = &out[Flat(0, y, t)];
-      for (int x : xs_out.index) {
-        float s = 0.0f;
-        int xi = x - c;
-        if (xi >= 0 && xi + k_dim <= dim_xy_) {
-          for (int k = 0; k < k_dim; ++k) s += w[k] * src[xi + k];
-        } else {
-          for (int k = 0; k < k_dim; ++k) s += w[k] * src[Wrap(xi + k, dim_xy_)];
+      for (int k = 0; k < k_dim; ++k) {
+        const float wk = w[k];
+        const int shift = k - c;  // dst[x] += wk * src[x + shift], wrapped
+        for (auto [b, e] : xs_out.runs) {
+          // Split [b, e) where x + shift leaves [0, n).
+          int lo = b;
+          if (lo + shift < 0) {
+            const int stop = std::min(e, -shift);
+            for (int x = lo; x < stop; ++x) dst[x] += wk * src[x + shift + n];
+            lo = stop;
+          }
+          const int mid_end = std::min(e, n - shift);
+          for (int x = lo; x < mid_end; ++x) dst[x] += wk * src[x + shift];
+          for (int x = std::max(lo, mid_end); x < e; ++x) dst[x] += wk * src[x + shift - n];
         }
-        dst[x] = s;
       }
     }
   }
 }
 
-void PoseCellNetwork::ConvolveY(const std::vector<float>& in, std::vector<float>& out,
+void PoseCellNetwork::ConvolveY(const std::vector<float>& in, const RowFlags& in_rows,
+                                std::vector<float>& out, RowFlags& out_rows,
                                 const std::vector<float>& w, const AxisSet& xs,
                                 const AxisSet& ys_in, const AxisSet& ys_out,
                                 const AxisSet& ts) const {
@@ -168,32 +178,41 @@ void PoseCellNetwork::ConvolveY(const std::vector<float>& in, std::vector<float>
   for (int t : ts.index) {
     for (int y : ys_out.index) {
       float* dst = &out[Flat(0, y, t)];
+      uint8_t any = 0;
       for (int k = 0; k < k_dim; ++k) {
         const int ys = Wrap(y + k - c, dim_xy_);
-        if (!ys_in.member[ys]) continue;
+        if (!ys_in.member[ys] || !in_rows[Row(ys, t)]) continue;
+        any = 1;
         const float* src = &in[Flat(0, ys, t)];
         const float wk = w[k];
-        for (int x : xs.index) dst[x] += wk * src[x];
+        for (auto [b, e] : xs.runs)
+          for (int x = b; x < e; ++x) dst[x] += wk * src[x];
       }
+      out_rows[Row(y, t)] = any;
     }
   }
 }
 
-void PoseCellNetwork::ConvolveTh(const std::vector<float>& in, std::vector<float>& out,
+void PoseCellNetwork::ConvolveTh(const std::vector<float>& in, const RowFlags& in_rows,
+                                 std::vector<float>& out, RowFlags& out_rows,
                                  const std::vector<float>& w, const AxisSet& xs,
                                  const AxisSet& ys, const AxisSet& ts_in,
                                  const AxisSet& ts_out) const {
   const int k_dim = static_cast<int>(w.size());
   const int c = k_dim / 2;
   for (int t : ts_out.index) {
+    for (int y : ys.index) out_rows[Row(y, t)] = 0;
     for (int k = 0; k < k_dim; ++k) {
       const int tsrc = Wrap(t + k - c, dim_th_);
       if (!ts_in.member[tsrc]) continue;
       const float wk = w[k];
       for (int y : ys.index) {
+        if (!in_rows[Row(y, tsrc)]) continue;
+        out_rows[Row(y, t)] = 1;
         const float* src = &in[Flat(0, y, tsrc)];
         float* dst = &out[Flat(0, y, t)];
-        for (int x : xs.index) dst[x] += wk * src[x];
+        for (auto [b, e] : xs.runs)
+          for (int x = b; x < e; ++x) dst[x] += wk * src[x];
       }
     }
   }
@@ -209,40 +228,72 @@ void PoseCellNetwork::ExciteInhibitNormalise() {
   Dilate(ts_, dim_th_, ce, ce, ex_ts_);
 
   // Excitation E = G_e * A, into buf_c_ over the dilated region.
-  ConvolveX(activity_, buf_a_, excite_w_, ex_xs_, ys_, ts_);
-  ConvolveY(buf_a_, buf_b_, excite_w_, ex_xs_, ys_, ex_ys_, ts_);
+  ConvolveX(activity_, rows_act_, buf_a_, rows_a_, excite_w_, ex_xs_, ys_, ts_);
+  ConvolveY(buf_a_, rows_a_, buf_b_, rows_b_, excite_w_, ex_xs_, ys_, ex_ys_, ts_);
   ZeroRegion(buf_a_, ex_xs_, ys_, ts_);
-  ConvolveTh(buf_b_, buf_c_, excite_w_, ex_xs_, ex_ys_, ts_, ex_ts_);
+  ConvolveTh(buf_b_, rows_b_, buf_c_, rows_c_, excite_w_, ex_xs_, ex_ys_, ts_, ex_ts_);
   ZeroRegion(buf_b_, ex_xs_, ex_ys_, ts_);
 
-  // Inhibition I = G_i * E. Only needed inside E's region: outside it E - I <= 0, which the
-  // global inhibition clamps to zero anyway.
-  ConvolveX(buf_c_, buf_a_, inhibit_w_, ex_xs_, ex_ys_, ex_ts_);
-  ConvolveY(buf_a_, buf_b_, inhibit_w_, ex_xs_, ex_ys_, ex_ys_, ex_ts_);
-  ZeroRegion(buf_a_, ex_xs_, ex_ys_, ex_ts_);
-  ConvolveTh(buf_b_, buf_a_, inhibit_w_, ex_xs_, ex_ys_, ex_ts_, ex_ts_);
-  ZeroRegion(buf_b_, ex_xs_, ex_ys_, ex_ts_);
-
-  // A = max(E - I - global, 0) (OpenRatSLAM zeroes anything below the global inhibition),
-  // written over the whole dilated region, which contains the old one.
+  // Inhibition I = G_i * E, needed only where E >= pc_global_inhib: elsewhere E - I - global
+  // < 0, which the global inhibition clamps to zero (OpenRatSLAM zeroes anything below it).
   const float global = static_cast<float>(config_.pc_global_inhib);
-  double total = 0.0;
+  std::fill(tmp_xs_.member.begin(), tmp_xs_.member.end(), 0);
+  std::fill(tmp_ys_.member.begin(), tmp_ys_.member.end(), 0);
+  std::fill(tmp_ts_.member.begin(), tmp_ts_.member.end(), 0);
   for (int t : ex_ts_.index) {
     for (int y : ex_ys_.index) {
-      const size_t row = Flat(0, y, t);
-      float* a = &activity_[row];
-      float* e = &buf_c_[row];
-      float* inh = &buf_a_[row];
-      for (int x : ex_xs_.index) {
-        float v = e[x] - inh[x];
-        v = v >= global ? v - global : 0.0f;
-        a[x] = v;
-        total += v;
-        e[x] = 0.0f;
-        inh[x] = 0.0f;
+      if (!rows_c_[Row(y, t)]) continue;
+      const float* e = &buf_c_[Flat(0, y, t)];
+      bool any = false;
+      for (auto [b, end] : ex_xs_.runs) {
+        for (int x = b; x < end; ++x) {
+          const bool strong = e[x] >= global && e[x] > 0.0f;
+          tmp_xs_.member[x] |= strong;
+          any |= strong;
+        }
       }
+      if (any) tmp_ys_.member[y] = tmp_ts_.member[t] = 1;
     }
   }
+  tmp_xs_.Finish();
+  tmp_ys_.Finish();
+  tmp_ts_.Finish();
+  ConvolveX(buf_c_, rows_c_, buf_a_, rows_a_, inhibit_w_, tmp_xs_, ex_ys_, ex_ts_);
+  ConvolveY(buf_a_, rows_a_, buf_b_, rows_b_, inhibit_w_, tmp_xs_, ex_ys_, tmp_ys_, ex_ts_);
+  ZeroRegion(buf_a_, tmp_xs_, ex_ys_, ex_ts_);
+  ConvolveTh(buf_b_, rows_b_, buf_a_, rows_a_, inhibit_w_, tmp_xs_, tmp_ys_, ex_ts_, tmp_ts_);
+  ZeroRegion(buf_b_, tmp_xs_, tmp_ys_, ex_ts_);
+
+  // A = max(E - I - global, 0) over the strong region; everything else becomes zero.
+  ZeroRegion(activity_, xs_, ys_, ts_);
+  double total = 0.0;
+  for (int t : tmp_ts_.index) {
+    for (int y : tmp_ys_.index) {
+      const size_t row = Flat(0, y, t);
+      float* a = &activity_[row];
+      const float* e = &buf_c_[row];
+      float* inh = &buf_a_[row];
+      if (!rows_c_[Row(y, t)]) {  // no excitation here: activity stays 0, clear the scratch
+        for (auto [b, end] : tmp_xs_.runs) std::fill(inh + b, inh + end, 0.0f);
+        continue;
+      }
+      float row_total = 0.0f;
+      for (auto [b, end] : tmp_xs_.runs) {
+        for (int x = b; x < end; ++x) {
+          float v = e[x] - inh[x];
+          v = v >= global ? v - global : 0.0f;
+          a[x] = v;
+          row_total += v;
+          inh[x] = 0.0f;
+        }
+      }
+      total += row_total;
+    }
+  }
+  ZeroRegion(buf_c_, ex_xs_, ex_ys_, ex_ts_);
+  std::swap(ex_xs_, tmp_xs_);  // the region RecomputeSupport scans below
+  std::swap(ex_ys_, tmp_ys_);
+  std::swap(ex_ts_, tmp_ts_);
   if (!(total > 0.0)) {
     // Cannot happen with valid parameters (the excitation peak always beats the inhibition);
     // recover deterministically rather than divide by zero.
@@ -256,7 +307,8 @@ void PoseCellNetwork::ExciteInhibitNormalise() {
   for (int t : ts_.index) {
     for (int y : ys_.index) {
       float* a = &activity_[Flat(0, y, t)];
-      for (int x : xs_.index) a[x] *= scale;
+      for (auto [b, e] : xs_.runs)
+        for (int x = b; x < e; ++x) a[x] *= scale;
     }
   }
 }
@@ -284,6 +336,7 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
       const float fy = static_cast<float>(sy - fy_floor);
       const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
       for (int y : ys_.index) {
+        if (!rows_act_[Row(y, t)]) continue;
         const float* src = &activity_[Flat(0, y, t)];
         const int y0 = Wrap(y + iy, dim_xy_);
         const int y1 = y0 + 1 == dim_xy_ ? 0 : y0 + 1;
@@ -305,14 +358,10 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
     }
     ZeroRegion(activity_, xs_, ys_, ts_);
     std::swap(activity_, buf_a_);
-    tmp_xs_.index.clear();
-    tmp_ys_.index.clear();
-    for (int i = 0; i < dim_xy_; ++i) {
-      if (tmp_xs_.member[i]) tmp_xs_.index.push_back(i);
-      if (tmp_ys_.member[i]) tmp_ys_.index.push_back(i);
-    }
+    tmp_xs_.Finish();
+    tmp_ys_.Finish();
     tmp_ts_.member = ts_.member;
-    tmp_ts_.index = ts_.index;
+    tmp_ts_.Finish();
     RecomputeSupport(tmp_xs_, tmp_ys_, tmp_ts_);
   }
 
@@ -328,26 +377,27 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
       tmp_ts_.member[t0] = 1;
       if (f > 0.0f) tmp_ts_.member[t1] = 1;
       for (int y : ys_.index) {
+        if (!rows_act_[Row(y, t)]) continue;
         const float* src = &activity_[Flat(0, y, t)];
         float* d0 = &buf_a_[Flat(0, y, t0)];
         float* d1 = &buf_a_[Flat(0, y, t1)];
-        for (int x : xs_.index) {
-          const float v = src[x];
-          d0[x] += (1.0f - f) * v;
-          if (f > 0.0f) d1[x] += f * v;
+        const float keep = 1.0f - f;
+        for (auto [b, e] : xs_.runs) {
+          for (int x = b; x < e; ++x) {
+            const float v = src[x];
+            d0[x] += keep * v;
+            d1[x] += f * v;
+          }
         }
       }
     }
     ZeroRegion(activity_, xs_, ys_, ts_);
     std::swap(activity_, buf_a_);
-    tmp_ts_.index.clear();
-    for (int i = 0; i < dim_th_; ++i) {
-      if (tmp_ts_.member[i]) tmp_ts_.index.push_back(i);
-    }
+    tmp_ts_.Finish();
     tmp_xs_.member = xs_.member;
-    tmp_xs_.index = xs_.index;
+    tmp_xs_.Finish();
     tmp_ys_.member = ys_.member;
-    tmp_ys_.index = ys_.index;
+    tmp_ys_.Finish();
     RecomputeSupport(tmp_xs_, tmp_ys_, tmp_ts_);
   }
 }
@@ -415,10 +465,11 @@ void PoseCellNetwork::InjectEnergy(int x, int y, int th, double energy) {
   y = Wrap(y, dim_xy_);
   th = Wrap(th, dim_th_);
   activity_[Flat(x, y, th)] += static_cast<float>(energy);
+  rows_act_[Row(y, th)] = 1;
   auto add = [](AxisSet& s, int i) {
     if (s.member[i]) return;
     s.member[i] = 1;
-    s.index.insert(std::lower_bound(s.index.begin(), s.index.end(), i), i);
+    s.Finish();
   };
   add(xs_, x);
   add(ys_, y);

@@ -24,6 +24,7 @@
 // kept zero outside the active region, so a step allocates nothing.
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "services/pose_cells/pose_cell_action.h"
@@ -70,6 +71,10 @@ class PoseCellNetwork {
   double TotalActivity() const;
   // Number of cells with non-zero activity.
   int ActiveCellCount() const;
+  // Cells in the box (product of active x, y and theta index sets) each step works on.
+  int ActiveRegionCells() const {
+    return static_cast<int>(xs_.index.size() * ys_.index.size() * ts_.index.size());
+  }
   const PoseCellConfig& config() const { return config_; }
   uint32_t experience_count() const { return static_cast<uint32_t>(experiences_.size()); }
   uint32_t template_count() const { return static_cast<uint32_t>(views_.size()); }
@@ -98,11 +103,32 @@ class PoseCellNetwork {
     double pc_x, pc_y, pc_th;
     uint32_t template_id;
   };
-  // Sorted active indices along one axis plus a membership mask.
+  // Active indices along one axis: sorted list, membership mask, and maximal contiguous runs
+  // [begin, end) (not wrapping), so inner loops over x are plain vectorisable ranges.
   struct AxisSet {
     std::vector<int> index;
     std::vector<uint8_t> member;
-    void Reset(int n) { index.clear(); member.assign(n, 0); }
+    std::vector<std::pair<int, int>> runs;
+    void Reset(int n) {
+      index.clear();
+      runs.clear();
+      member.assign(n, 0);
+    }
+    // Rebuilds index and runs from member.
+    void Finish() {
+      index.clear();
+      runs.clear();
+      const int n = static_cast<int>(member.size());
+      for (int i = 0; i < n; ++i) {
+        if (!member[i]) continue;
+        index.push_back(i);
+        if (!runs.empty() && runs.back().second == i) {
+          ++runs.back().second;
+        } else {
+          runs.emplace_back(i, i + 1);
+        }
+      }
+    }
   };
 
   size_t Flat(int x, int y, int th) const {
@@ -112,14 +138,19 @@ class PoseCellNetwork {
   void ZeroRegion(std::vector<float>& buf, const AxisSet& xs, const AxisSet& ys, const AxisSet& ts);
   // Recomputes the active sets of activity_ from scratch within the given region.
   void RecomputeSupport(const AxisSet& xs, const AxisSet& ys, const AxisSet& ts);
-  void ConvolveX(const std::vector<float>& in, std::vector<float>& out, const std::vector<float>& w,
-                 const AxisSet& xs_out, const AxisSet& ys, const AxisSet& ts) const;
-  void ConvolveY(const std::vector<float>& in, std::vector<float>& out, const std::vector<float>& w,
-                 const AxisSet& xs, const AxisSet& ys_in, const AxisSet& ys_out,
-                 const AxisSet& ts) const;
-  void ConvolveTh(const std::vector<float>& in, std::vector<float>& out, const std::vector<float>& w,
-                  const AxisSet& xs, const AxisSet& ys, const AxisSet& ts_in,
-                  const AxisSet& ts_out) const;
+  // Row flags (one per (theta, y) row: any non-zero cell) let the passes skip the empty rows of
+  // the box, which matter when a view injection starts a second packet far from the first.
+  using RowFlags = std::vector<uint8_t>;
+  void ConvolveX(const std::vector<float>& in, const RowFlags& in_rows, std::vector<float>& out,
+                 RowFlags& out_rows, const std::vector<float>& w, const AxisSet& xs_out,
+                 const AxisSet& ys, const AxisSet& ts) const;
+  void ConvolveY(const std::vector<float>& in, const RowFlags& in_rows, std::vector<float>& out,
+                 RowFlags& out_rows, const std::vector<float>& w, const AxisSet& xs,
+                 const AxisSet& ys_in, const AxisSet& ys_out, const AxisSet& ts) const;
+  void ConvolveTh(const std::vector<float>& in, const RowFlags& in_rows, std::vector<float>& out,
+                  RowFlags& out_rows, const std::vector<float>& w, const AxisSet& xs,
+                  const AxisSet& ys, const AxisSet& ts_in, const AxisSet& ts_out) const;
+  size_t Row(int y, int th) const { return static_cast<size_t>(th) * dim_xy_ + y; }
   bool Linked(uint32_t a, uint32_t b) const;
   void CreateExperience();
   void ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id,
@@ -133,6 +164,7 @@ class PoseCellNetwork {
 
   std::vector<float> activity_;  // zero outside (xs_, ys_, ts_)
   std::vector<float> buf_a_, buf_b_, buf_c_;  // scratch, always all zero between calls
+  RowFlags rows_act_, rows_a_, rows_b_, rows_c_;  // valid inside each buffer's current region
   AxisSet xs_, ys_, ts_;                      // active region of activity_
   AxisSet ex_xs_, ex_ys_, ex_ts_, tmp_xs_, tmp_ys_, tmp_ts_;  // scratch sets
 
