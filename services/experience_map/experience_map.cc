@@ -1,0 +1,481 @@
+#include "services/experience_map/experience_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <numbers>
+#include <queue>
+#include <stdexcept>
+#include <string>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+namespace rslam::experience_map {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// Angle in (-pi, pi].
+double ClipAngle(double a) {
+  if (a > kPi || a <= -kPi) {
+    a = std::remainder(a, 2.0 * kPi);
+    if (a <= -kPi) a += 2.0 * kPi;
+  }
+  return a;
+}
+
+[[noreturn]] void Reject(const std::string& why) {
+  throw std::invalid_argument("experience map: " + why);
+}
+
+std::string Id(uint32_t id) { return id == kNoExperience ? std::string("none") : std::to_string(id); }
+
+}  // namespace
+
+ExperienceMap::ExperienceMap(const ExperienceMapConfig& config)
+    : config_((config.Validate(), config)),
+      accum_facing_(ClipAngle(config.exp_initial_em_deg * kPi / 180.0)) {}
+
+void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s) {
+  if (!std::isfinite(vtrans_mps)) Reject("vtrans is not finite");
+  if (!std::isfinite(vrot_radps)) Reject("vrot is not finite");
+  if (!std::isfinite(dt_s) || dt_s < 0) Reject("dt must be finite and >= 0");
+  const double dist = vtrans_mps * dt_s;
+  // OpenRatSLAM order: turn, then move along the new facing.
+  accum_facing_ = ClipAngle(accum_facing_ + vrot_radps * dt_s);
+  accum_x_ += dist * std::cos(accum_facing_);
+  accum_y_ += dist * std::sin(accum_facing_);
+  accum_time_ += dt_s;
+}
+
+ExperienceMap::Observation ExperienceMap::ObservedFromCurrent(double relative_angle_rad) const {
+  const Experience& cur = experiences_[current_];
+  return {std::hypot(accum_x_, accum_y_), ClipAngle(std::atan2(accum_y_, accum_x_) - cur.th_rad),
+          ClipAngle(accum_facing_ + relative_angle_rad - cur.th_rad), accum_time_};
+}
+
+int ExperienceMap::FindLink(uint32_t from, uint32_t to) const {
+  for (uint32_t li : links_from_[from]) {
+    if (links_[li].to_id == to) return static_cast<int>(li);
+  }
+  return -1;
+}
+
+void ExperienceMap::AddLink(uint32_t from, uint32_t to, const Observation& o) {
+  Link link;
+  link.from_id = from;
+  link.to_id = to;
+  link.d_m = o.d;
+  link.heading_rad = o.heading;
+  link.facing_rad = o.facing;
+  link.travel_time_s = o.time;
+  link.traversals = 1;
+  const uint32_t index = static_cast<uint32_t>(links_.size());
+  links_.push_back(link);
+  links_from_[from].push_back(index);
+  links_to_[to].push_back(index);
+}
+
+void ExperienceMap::AverageInto(Link& link, const Observation& obs, bool reversed) {
+  Observation o = obs;
+  if (reversed) {
+    // The observation runs to -> from: invert the transform into the link's direction.
+    o.heading = ClipAngle(obs.heading - obs.facing + kPi);
+    o.facing = ClipAngle(-obs.facing);
+  }
+  // 000 eq. 2 with A = n/(n+1), B = 1/(n+1): a running mean over the traversals.
+  const double n = link.traversals;
+  const double a = n / (n + 1.0), b = 1.0 / (n + 1.0);
+  const double vx = a * link.d_m * std::cos(link.heading_rad) + b * o.d * std::cos(o.heading);
+  const double vy = a * link.d_m * std::sin(link.heading_rad) + b * o.d * std::sin(o.heading);
+  link.d_m = std::hypot(vx, vy);
+  link.heading_rad = std::atan2(vy, vx);
+  link.facing_rad = ClipAngle(link.facing_rad + b * ClipAngle(o.facing - link.facing_rad));
+  link.travel_time_s = a * link.travel_time_s + b * o.time;
+  link.traversals += 1;
+}
+
+void ExperienceMap::SetCurrent(uint32_t id, double relative_angle_rad) {
+  if (has_current_ && id == current_) return;  // OpenRatSLAM keeps accumulating then
+  current_ = id;
+  has_current_ = true;
+  accum_x_ = accum_y_ = accum_time_ = 0.0;
+  accum_facing_ = ClipAngle(experiences_[id].th_rad + relative_angle_rad);
+}
+
+void ExperienceMap::ValidateIds(const ExperienceAction& a) const {
+  if (!std::isfinite(a.relative_angle_rad)) Reject("relative angle is not finite");
+  const uint32_t n = static_cast<uint32_t>(experiences_.size());
+  switch (a.kind) {
+    case ExperienceAction::Kind::kNone:
+      return;
+    case ExperienceAction::Kind::kCreate:
+      if (a.experience_id != n) {
+        Reject("create of experience " + Id(a.experience_id) + " but the next id is " + std::to_string(n));
+      }
+      if (n == 0 && a.from_experience_id != kNoExperience) {
+        Reject("first experience created from " + Id(a.from_experience_id) + " (expected none)");
+      }
+      if (n > 0 && a.from_experience_id != current_) {
+        Reject("create from " + Id(a.from_experience_id) + " but the current experience is " + Id(current_));
+      }
+      if (!std::isfinite(a.pc_x) || !std::isfinite(a.pc_y) || !std::isfinite(a.pc_th)) {
+        Reject("pose-cell position is not finite");
+      }
+      return;
+    case ExperienceAction::Kind::kLink:
+    case ExperienceAction::Kind::kSet:
+      if (a.experience_id >= n) Reject("unknown experience " + Id(a.experience_id));
+      if (!has_current_ || a.from_experience_id != current_) {
+        Reject("action from " + Id(a.from_experience_id) + " but the current experience is " +
+               (has_current_ ? Id(current_) : std::string("none")));
+      }
+      if (a.kind == ExperienceAction::Kind::kLink && a.experience_id == current_) {
+        Reject("link from experience " + Id(current_) + " to itself");
+      }
+      return;
+  }
+  Reject("unknown action kind");
+}
+
+void ExperienceMap::Apply(const ExperienceAction& a) {
+  ValidateIds(a);
+  switch (a.kind) {
+    case ExperienceAction::Kind::kNone:
+      break;
+    case ExperienceAction::Kind::kCreate: {
+      Experience e;
+      e.id = static_cast<uint32_t>(experiences_.size());
+      if (has_current_) {
+        const Experience& cur = experiences_[current_];
+        e.x_m = cur.x_m + accum_x_;
+        e.y_m = cur.y_m + accum_y_;
+      } else {
+        e.x_m = accum_x_;
+        e.y_m = accum_y_;
+      }
+      e.th_rad = ClipAngle(accum_facing_);
+      e.template_id = a.template_id;
+      e.pc_x = a.pc_x;
+      e.pc_y = a.pc_y;
+      e.pc_th = a.pc_th;
+      experiences_.push_back(e);
+      links_from_.emplace_back();
+      links_to_.emplace_back();
+      if (has_current_) AddLink(current_, e.id, ObservedFromCurrent(0.0));
+      SetCurrent(e.id, 0.0);
+      break;
+    }
+    case ExperienceAction::Kind::kLink:
+    case ExperienceAction::Kind::kSet: {
+      const uint32_t to = a.experience_id;
+      if (to == current_) break;
+      const Observation o = ObservedFromCurrent(a.relative_angle_rad);
+      const bool link_kind = a.kind == ExperienceAction::Kind::kLink;
+      bool changed = false;
+      if (link_kind || config_.exp_average_repeated_links) {
+        if (const int fwd = FindLink(current_, to); fwd >= 0) {
+          AverageInto(links_[fwd], o, false);
+          changed = true;
+        } else if (const int back = FindLink(to, current_); back >= 0) {
+          AverageInto(links_[back], o, true);
+          changed = true;
+        } else if (link_kind) {
+          AddLink(current_, to, o);
+          changed = true;
+        }
+      }
+      if (changed) SeedLocalRegion(current_, to);
+      SetCurrent(to, a.relative_angle_rad);
+      break;
+    }
+  }
+  if (a.kind != ExperienceAction::Kind::kNone) next_sequence_ = a.sequence + 1;
+  if (config_.exp_relax_budget_links == 0) {
+    if (a.kind != ExperienceAction::Kind::kNone) Relax(config_.exp_loops);
+  } else {
+    CorrectBudgeted();
+  }
+}
+
+double ExperienceMap::RelaxLink(const Link& link) {
+  Experience& from = experiences_[link.from_id];
+  Experience& to = experiences_[link.to_id];
+  const double alpha = config_.exp_correction;
+  // Where `from` and the link say `to` should be; move both by alpha of the error (000 eq. 3).
+  const double lx = from.x_m + link.d_m * std::cos(from.th_rad + link.heading_rad);
+  const double ly = from.y_m + link.d_m * std::sin(from.th_rad + link.heading_rad);
+  const double ex = (to.x_m - lx) * alpha;
+  const double ey = (to.y_m - ly) * alpha;
+  from.x_m += ex;
+  from.y_m += ey;
+  to.x_m -= ex;
+  to.y_m -= ey;
+  const double df = ClipAngle(to.th_rad - (from.th_rad + link.facing_rad)) * alpha;
+  from.th_rad = ClipAngle(from.th_rad + df);
+  to.th_rad = ClipAngle(to.th_rad - df);
+  return std::max({std::abs(ex), std::abs(ey), std::abs(df)});
+}
+
+void ExperienceMap::SeedLocalRegion(uint32_t a, uint32_t b) {
+  local_region_.clear();
+  const size_t limit = static_cast<size_t>(config_.exp_local_region_links);
+  if (limit == 0) return;
+  std::unordered_set<uint32_t> seen_exp{a, b};
+  std::unordered_set<uint32_t> seen_link;
+  std::deque<uint32_t> queue{a, b};
+  while (!queue.empty() && local_region_.size() < limit) {
+    const uint32_t e = queue.front();
+    queue.pop_front();
+    for (const auto* list : {&links_from_[e], &links_to_[e]}) {
+      for (uint32_t li : *list) {
+        if (local_region_.size() >= limit) break;
+        if (!seen_link.insert(li).second) continue;
+        local_region_.push_back(li);
+        const Link& l = links_[li];
+        const uint32_t other = l.from_id == e ? l.to_id : l.from_id;
+        if (seen_exp.insert(other).second) queue.push_back(other);
+      }
+    }
+  }
+}
+
+int ExperienceMap::CorrectBudgeted() {
+  int budget = config_.exp_relax_budget_links;
+  int relaxed = 0;
+  if (!local_region_.empty()) {
+    double largest = 0.0;
+    for (uint32_t li : local_region_) largest = std::max(largest, RelaxLink(links_[li]));
+    relaxed += static_cast<int>(local_region_.size());
+    budget -= static_cast<int>(local_region_.size());
+    if (largest <= config_.exp_relax_tolerance) local_region_.clear();
+  }
+  if (links_.empty()) return relaxed;
+  // Continue the global sweep; experiences without outgoing links also cost one unit, so the
+  // work per frame is bounded whatever the map looks like.
+  const uint32_t n = static_cast<uint32_t>(experiences_.size());
+  while (budget > 0) {
+    if (sweep_experience_ >= n) {
+      sweep_experience_ = 0;
+      sweep_link_ = 0;
+    }
+    const auto& out = links_from_[sweep_experience_];
+    if (sweep_link_ < out.size()) {
+      RelaxLink(links_[out[sweep_link_]]);
+      ++sweep_link_;
+      ++relaxed;
+    } else {
+      ++sweep_experience_;
+      sweep_link_ = 0;
+    }
+    --budget;
+  }
+  return relaxed;
+}
+
+void ExperienceMap::Relax(int iterations) {
+  for (int i = 0; i < iterations; ++i) {
+    for (uint32_t e = 0; e < experiences_.size(); ++e) {
+      for (uint32_t li : links_from_[e]) RelaxLink(links_[li]);
+    }
+  }
+  sweep_experience_ = 0;
+  sweep_link_ = 0;
+  local_region_.clear();
+}
+
+std::vector<uint32_t> ExperienceMap::PathToGoal(uint32_t from_id, uint32_t goal_id) const {
+  const uint32_t n = static_cast<uint32_t>(experiences_.size());
+  if (from_id >= n) Reject("path start " + Id(from_id) + " is unknown");
+  if (goal_id >= n) Reject("path goal " + Id(goal_id) + " is unknown");
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> time(n, inf);
+  std::vector<uint32_t> previous(n, kNoExperience);
+  using Item = std::pair<double, uint32_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
+  time[from_id] = 0.0;
+  heap.push({0.0, from_id});
+  while (!heap.empty()) {
+    const auto [t, e] = heap.top();
+    heap.pop();
+    if (t > time[e]) continue;
+    if (e == goal_id) break;
+    for (const auto* list : {&links_from_[e], &links_to_[e]}) {
+      for (uint32_t li : *list) {
+        const Link& l = links_[li];
+        const uint32_t other = l.from_id == e ? l.to_id : l.from_id;
+        const double candidate = t + l.travel_time_s;
+        if (candidate < time[other]) {
+          time[other] = candidate;
+          previous[other] = e;
+          heap.push({candidate, other});
+        }
+      }
+    }
+  }
+  if (time[goal_id] == inf) return {};
+  std::vector<uint32_t> path;
+  for (uint32_t e = goal_id; e != kNoExperience; e = previous[e]) path.push_back(e);
+  std::reverse(path.begin(), path.end());
+  return path;
+}
+
+void ExperienceMap::MergeFrom(const ExperienceMap& other, const std::vector<MapAnchor>& anchors) {
+  if (&other == this) Reject("cannot merge a map into itself");
+  for (const MapAnchor& an : anchors) {
+    if (an.this_id >= experiences_.size()) Reject("anchor refers to unknown experience " + Id(an.this_id));
+    if (an.other_id >= other.experiences_.size()) {
+      Reject("anchor refers to unknown experience " + Id(an.other_id) + " of the merged map");
+    }
+  }
+  const uint32_t offset = static_cast<uint32_t>(experiences_.size());
+  const uint32_t link_offset = static_cast<uint32_t>(links_.size());
+  // Rigid transform placing other's first anchor on ours.
+  double dth = 0.0, ox = 0.0, oy = 0.0, tx = 0.0, ty = 0.0;
+  if (!anchors.empty()) {
+    const Experience& mine = experiences_[anchors[0].this_id];
+    const Experience& theirs = other.experiences_[anchors[0].other_id];
+    dth = ClipAngle(mine.th_rad - theirs.th_rad);
+    ox = theirs.x_m;
+    oy = theirs.y_m;
+    tx = mine.x_m;
+    ty = mine.y_m;
+  }
+  const double c = std::cos(dth), s = std::sin(dth);
+  for (const Experience& e : other.experiences_) {
+    Experience copy = e;
+    copy.id = e.id + offset;
+    const double rx = e.x_m - ox, ry = e.y_m - oy;
+    copy.x_m = tx + c * rx - s * ry;
+    copy.y_m = ty + s * rx + c * ry;
+    copy.th_rad = ClipAngle(e.th_rad + dth);
+    experiences_.push_back(copy);
+    links_from_.emplace_back();
+    links_to_.emplace_back();
+  }
+  for (const Link& l : other.links_) {
+    Link copy = l;
+    copy.from_id += offset;
+    copy.to_id += offset;
+    links_.push_back(copy);
+    links_from_[copy.from_id].push_back(static_cast<uint32_t>(links_.size() - 1));
+    links_to_[copy.to_id].push_back(static_cast<uint32_t>(links_.size() - 1));
+  }
+  (void)link_offset;
+  for (const MapAnchor& an : anchors) AddLink(an.this_id, an.other_id + offset, {0.0, 0.0, 0.0, 0.0});
+  if (!anchors.empty()) SeedLocalRegion(anchors[0].this_id, anchors[0].other_id + offset);
+}
+
+Pose2 ExperienceMap::RobotPose() const {
+  if (!has_current_) return {accum_x_, accum_y_, accum_facing_};
+  const Experience& cur = experiences_[current_];
+  return {cur.x_m + accum_x_, cur.y_m + accum_y_, accum_facing_};
+}
+
+double ExperienceMap::MaxLinkError() const {
+  double worst = 0.0;
+  for (const Link& l : links_) {
+    const Experience& from = experiences_[l.from_id];
+    const Experience& to = experiences_[l.to_id];
+    const double lx = from.x_m + l.d_m * std::cos(from.th_rad + l.heading_rad);
+    const double ly = from.y_m + l.d_m * std::sin(from.th_rad + l.heading_rad);
+    worst = std::max(worst, std::hypot(to.x_m - lx, to.y_m - ly));
+  }
+  return worst;
+}
+
+proto::ExperienceMap ExperienceMap::Save() const {
+  proto::ExperienceMap m;
+  for (const Experience& e : experiences_) {
+    auto* p = m.add_experiences();
+    p->set_x_m(e.x_m);
+    p->set_y_m(e.y_m);
+    p->set_th_rad(e.th_rad);
+    p->set_template_id(e.template_id);
+    p->set_pc_x(e.pc_x);
+    p->set_pc_y(e.pc_y);
+    p->set_pc_th(e.pc_th);
+  }
+  for (const Link& l : links_) {
+    auto* p = m.add_links();
+    p->set_from_id(l.from_id);
+    p->set_to_id(l.to_id);
+    p->set_d_m(l.d_m);
+    p->set_heading_rad(l.heading_rad);
+    p->set_facing_rad(l.facing_rad);
+    p->set_travel_time_s(l.travel_time_s);
+    p->set_traversals(l.traversals);
+  }
+  m.set_has_current(has_current_);
+  m.set_current_id(current_);
+  m.set_accum_x_m(accum_x_);
+  m.set_accum_y_m(accum_y_);
+  m.set_accum_facing_rad(accum_facing_);
+  m.set_accum_time_s(accum_time_);
+  m.set_sweep_experience(sweep_experience_);
+  m.set_sweep_link(sweep_link_);
+  for (uint32_t li : local_region_) m.add_local_region_links(li);
+  m.set_next_sequence(next_sequence_);
+  return m;
+}
+
+void ExperienceMap::Load(const proto::ExperienceMap& m) {
+  const uint32_t n = static_cast<uint32_t>(m.experiences_size());
+  const uint32_t nl = static_cast<uint32_t>(m.links_size());
+  auto finite = [](std::initializer_list<double> values) {
+    for (double v : values)
+      if (!std::isfinite(v)) return false;
+    return true;
+  };
+  for (const auto& e : m.experiences()) {
+    if (!finite({e.x_m(), e.y_m(), e.th_rad(), e.pc_x(), e.pc_y(), e.pc_th()})) {
+      Reject("saved experience has non-finite numbers");
+    }
+  }
+  for (const auto& l : m.links()) {
+    if (l.from_id() >= n || l.to_id() >= n) Reject("saved link refers to an unknown experience");
+    if (!finite({l.d_m(), l.heading_rad(), l.facing_rad(), l.travel_time_s()}) || l.d_m() < 0 ||
+        l.travel_time_s() < 0) {
+      Reject("saved link has invalid numbers");
+    }
+  }
+  if (m.has_current() && m.current_id() >= n) Reject("saved current experience is unknown");
+  if (!m.has_current() && n > 0) Reject("saved map has experiences but no current one");
+  if (!finite({m.accum_x_m(), m.accum_y_m(), m.accum_facing_rad(), m.accum_time_s()})) {
+    Reject("saved odometry accumulator is not finite");
+  }
+  if (m.sweep_experience() > n) Reject("saved sweep position out of range");
+  for (uint32_t li : m.local_region_links()) {
+    if (li >= nl) Reject("saved local region refers to an unknown link");
+  }
+
+  experiences_.clear();
+  for (uint32_t i = 0; i < n; ++i) {
+    const auto& p = m.experiences(i);
+    experiences_.push_back({i, p.x_m(), p.y_m(), ClipAngle(p.th_rad()), p.template_id(), p.pc_x(), p.pc_y(), p.pc_th()});
+  }
+  links_.clear();
+  links_from_.assign(n, {});
+  links_to_.assign(n, {});
+  for (uint32_t i = 0; i < nl; ++i) {
+    const auto& p = m.links(i);
+    links_.push_back({p.from_id(), p.to_id(), p.d_m(), p.heading_rad(), p.facing_rad(), p.travel_time_s(),
+                      std::max<uint32_t>(1, p.traversals())});
+    links_from_[p.from_id()].push_back(i);
+    links_to_[p.to_id()].push_back(i);
+  }
+  has_current_ = m.has_current();
+  current_ = m.current_id();
+  accum_x_ = m.accum_x_m();
+  accum_y_ = m.accum_y_m();
+  accum_facing_ = m.accum_facing_rad();
+  accum_time_ = m.accum_time_s();
+  sweep_experience_ = m.sweep_experience();
+  sweep_link_ = m.sweep_link();
+  local_region_.assign(m.local_region_links().begin(), m.local_region_links().end());
+  next_sequence_ = m.next_sequence();
+}
+
+}  // namespace rslam::experience_map

@@ -1,0 +1,138 @@
+#pragma once
+// The RatSLAM experience map (Milford & Wyeth, paper 000 section II; OpenRatSLAM
+// experience_map.cpp is the reference behaviour).
+//
+// - Experiences are nodes with a pose p_i = (x, y, theta) in metres and radians.
+// - A link i -> j stores the odometric transform of the transition, 000 eq. 1, in i's frame:
+//   distance d, heading (direction of travel relative to theta_i), facing (theta_j - theta_i),
+//   and the travel time.
+// - Repeated transitions average the link (000 eq. 2): with n earlier observations,
+//   dp_new = n/(n+1) dp_old + 1/(n+1) dp_curr (displacement averaged as a vector in i's frame,
+//   facing as an angle), i.e. A = n/(n+1) I and B = 1/(n+1) I.
+// - Map correction (000 eq. 3): each link pulls its two experiences towards agreement by alpha
+//   (exp_correction = 0.5) of the error, positions and facings, in OpenRatSLAM's sweep order
+//   (experience id, then its outgoing links).
+//
+// Bounded cost per frame (the design choice): OpenRatSLAM runs exp_loops full sweeps after every
+// action, so its cost grows with the map. Here each frame gets exp_relax_budget_links link
+// relaxations: first the links around the latest loop closure (a breadth-first region of up to
+// exp_local_region_links links, re-swept every frame until it settles, which fixes most of the
+// visible error at once), then the rest of the budget continues a global sweep from where the
+// previous frame stopped. The global part executes exactly the link-relaxation sequence of
+// repeated full sweeps, only sliced over frames, so with no new actions the map converges to the
+// same fixed point as Relax(). Relax(iterations) runs full sweeps at once (e.g. before export).
+// exp_relax_budget_links = 0 restores OpenRatSLAM's behaviour.
+
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include "services/experience_map/experience_action.h"
+#include "services/experience_map/experience_map_config.h"
+#include "services/experience_map/proto/experience_map.pb.h"
+
+namespace rslam::experience_map {
+
+struct Experience {
+  uint32_t id = 0;
+  double x_m = 0.0, y_m = 0.0, th_rad = 0.0;
+  uint32_t template_id = 0;
+  double pc_x = 0.0, pc_y = 0.0, pc_th = 0.0;
+};
+
+struct Link {
+  uint32_t from_id = 0, to_id = 0;
+  double d_m = 0.0;
+  double heading_rad = 0.0;
+  double facing_rad = 0.0;
+  double travel_time_s = 0.0;
+  uint32_t traversals = 1;
+};
+
+struct Pose2 {
+  double x_m = 0.0, y_m = 0.0, th_rad = 0.0;
+};
+
+// A pair of experiences known to be the same place when merging two maps.
+struct MapAnchor {
+  uint32_t this_id = 0;
+  uint32_t other_id = 0;
+};
+
+class ExperienceMap {
+ public:
+  explicit ExperienceMap(const ExperienceMapConfig& config);
+  ExperienceMap(const ExperienceMap&) = delete;
+  ExperienceMap& operator=(const ExperienceMap&) = delete;
+
+  // Accumulates odometry since the current experience (vtrans m/s, vrot rad/s over dt s).
+  // Throws std::invalid_argument on non-finite values or negative dt.
+  void Integrate(double vtrans_mps, double vrot_radps, double dt_s);
+
+  // Applies one action, then spends this frame's correction budget (call it once per frame,
+  // with kind kNone when the pose cells emitted nothing). Throws std::invalid_argument, with the
+  // map unchanged, when ids are inconsistent: kCreate of an id other than the next dense id or
+  // from an experience other than the current one; kLink/kSet of unknown ids or from an
+  // experience other than the current one; non-finite angle.
+  void Apply(const ExperienceAction& action);
+
+  // One frame's correction budget only (Apply calls it). Returns link relaxations done.
+  int CorrectBudgeted();
+  // `iterations` full sweeps over all links (OpenRatSLAM iterate()); resets the sliced sweep to
+  // a sweep boundary and drops the local region.
+  void Relax(int iterations);
+
+  // Shortest path by travel time over links (either direction) from `from_id` to `goal_id`,
+  // both included; empty when unreachable. Throws std::invalid_argument for unknown ids.
+  std::vector<uint32_t> PathToGoal(uint32_t from_id, uint32_t goal_id) const;
+
+  // Appends `other` (its ids offset by this map's experience count), optionally anchored: the
+  // first anchor places other's experience on ours (rigid transform of other's poses) and every
+  // anchor adds a zero-length link this_id -> other_id + offset. Current experience unchanged.
+  void MergeFrom(const ExperienceMap& other, const std::vector<MapAnchor>& anchors);
+
+  const std::vector<Experience>& experiences() const { return experiences_; }
+  const std::vector<Link>& links() const { return links_; }
+  bool has_current() const { return has_current_; }
+  uint32_t current_id() const { return current_; }
+  // Current experience's pose plus the odometry accumulated since it.
+  Pose2 RobotPose() const;
+  uint64_t next_sequence() const { return next_sequence_; }
+  // Largest link error (position, m) over the map: how far from consistent the map is.
+  double MaxLinkError() const;
+  const ExperienceMapConfig& config() const { return config_; }
+
+  proto::ExperienceMap Save() const;
+  // Replaces the map; throws std::invalid_argument (map unchanged) when the message is
+  // inconsistent (unknown ids, non-finite numbers).
+  void Load(const proto::ExperienceMap& message);
+
+ private:
+  struct Observation {
+    double d, heading, facing, time;
+  };
+  Observation ObservedFromCurrent(double relative_angle_rad) const;
+  void AddLink(uint32_t from, uint32_t to, const Observation& o);
+  void AverageInto(Link& link, const Observation& o, bool reversed);
+  int FindLink(uint32_t from, uint32_t to) const;
+  void SetCurrent(uint32_t id, double relative_angle_rad);
+  // Relaxes one link (000 eq. 3); returns the largest change it made.
+  double RelaxLink(const Link& link);
+  void SeedLocalRegion(uint32_t a, uint32_t b);
+  void ValidateIds(const ExperienceAction& a) const;
+
+  const ExperienceMapConfig config_;
+  std::vector<Experience> experiences_;
+  std::vector<Link> links_;
+  std::vector<std::vector<uint32_t>> links_from_;  // per experience: outgoing link indices
+  std::vector<std::vector<uint32_t>> links_to_;    // per experience: incoming link indices
+  bool has_current_ = false;
+  uint32_t current_ = 0;
+  double accum_x_ = 0.0, accum_y_ = 0.0, accum_facing_ = 0.0, accum_time_ = 0.0;
+  uint32_t sweep_experience_ = 0;  // global sliced sweep position
+  uint32_t sweep_link_ = 0;
+  std::vector<uint32_t> local_region_;  // link indices, breadth-first from the latest closure
+  uint64_t next_sequence_ = 0;
+};
+
+}  // namespace rslam::experience_map

@@ -1,0 +1,49 @@
+#pragma once
+// Configuration of the experience map. OpenRatSLAM keys keep their names and defaults.
+
+#include "common/config/config_error.h"
+
+namespace rslam::experience_map {
+
+struct ExperienceMapConfig {
+  int exp_loops = 10;               // full correction sweeps per Relax() call (OpenRatSLAM 10)
+  double exp_correction = 0.5;      // alpha of 000 eq. 3
+  double exp_initial_em_deg = 90.0; // facing of the first experience
+  // Link relaxations per frame. 0 = OpenRatSLAM behaviour: exp_loops full sweeps after every
+  // action (cost grows with the map).
+  int exp_relax_budget_links = 2000;
+  // Links around the latest loop closure re-relaxed every frame (part of the budget) until a
+  // local sweep moves nothing by more than exp_relax_tolerance.
+  int exp_local_region_links = 1000;
+  double exp_relax_tolerance = 1e-6;  // m and rad
+  // Average the observed transform into an existing link when the robot re-traverses it
+  // (000 eq. 2). OpenRatSLAM keeps the first observation only (false).
+  bool exp_average_repeated_links = true;
+
+  template <class V>
+  void VisitFields(V& v) {
+    v("exp_loops", exp_loops, "full correction sweeps per Relax() (and per action when the budget is 0)");
+    v("exp_correction", exp_correction, "map correction rate alpha (000 eq. 3)");
+    v("exp_initial_em_deg", exp_initial_em_deg, "facing of the first experience in degrees");
+    v("exp_relax_budget_links", exp_relax_budget_links,
+      "link relaxations per frame; 0 = OpenRatSLAM full relaxation after every action");
+    v("exp_local_region_links", exp_local_region_links,
+      "links around the latest loop closure relaxed first each frame");
+    v("exp_relax_tolerance", exp_relax_tolerance,
+      "local correction stops when a local sweep moves nothing more than this (m, rad)");
+    v("exp_average_repeated_links", exp_average_repeated_links,
+      "average re-traversals into the existing link (000 eq. 2)");
+  }
+
+  void Validate() const {
+    Require(exp_loops >= 0, "exp_loops", "must be non-negative");
+    Require(exp_correction > 0 && exp_correction <= 0.5, "exp_correction", "must be in (0, 0.5]");
+    Require(exp_initial_em_deg >= -360 && exp_initial_em_deg <= 360, "exp_initial_em_deg",
+            "must be in [-360, 360]");
+    Require(exp_relax_budget_links >= 0, "exp_relax_budget_links", "must be non-negative");
+    Require(exp_local_region_links >= 0, "exp_local_region_links", "must be non-negative");
+    Require(exp_relax_tolerance >= 0, "exp_relax_tolerance", "must be non-negative");
+  }
+};
+
+}  // namespace rslam::experience_map
