@@ -10,33 +10,43 @@
 
 namespace rslam::odometry {
 
-double ShiftedProfileDifference(std::span<const float> current, std::span<const float> previous, int shift) {
+double ShiftedProfileDifference(std::span<const float> current, std::span<const float> previous, int shift,
+                                bool match_gain) {
   const int w = static_cast<int>(current.size());
   if (previous.size() != current.size()) throw std::invalid_argument("profiles differ in length");
   if (std::abs(shift) >= w) throw std::invalid_argument("shift leaves no overlap");
   const int overlap = w - std::abs(shift);
   const float* a = current.data() + std::max(shift, 0);
   const float* b = previous.data() - std::min(shift, 0);
+  float gain = 1.0f;
+  if (match_gain) {
+    float sum_a = 0.0f, sum_b = 0.0f;
+    for (int n = 0; n < overlap; ++n) {
+      sum_a += a[n];
+      sum_b += b[n];
+    }
+    // A black overlap has no exposure to match.
+    if (sum_b > 1e-6f && sum_a > 1e-6f) gain = sum_a / sum_b;
+  }
   float sum = 0.0f;
-  for (int n = 0; n < overlap; ++n) sum += std::abs(a[n] - b[n]);
+  for (int n = 0; n < overlap; ++n) sum += std::abs(a[n] - gain * b[n]);
   return static_cast<double>(sum) / overlap;
 }
 
 ProfileMatch BestProfileShift(std::span<const float> current, std::span<const float> previous, int max_shift,
-                              int min_overlap) {
+                              int min_overlap, bool match_gain) {
   const int w = static_cast<int>(current.size());
-  ProfileMatch best{0, ShiftedProfileDifference(current, previous, 0)};
+  ProfileMatch best{0, ShiftedProfileDifference(current, previous, 0, match_gain)};
   for (int magnitude = 1; magnitude <= max_shift && w - magnitude > min_overlap; ++magnitude) {
     for (int shift : {magnitude, -magnitude}) {
-      const double f = ShiftedProfileDifference(current, previous, shift);
+      const double f = ShiftedProfileDifference(current, previous, shift, match_gain);
       if (f < best.difference) best = {shift, f};
     }
   }
   return best;
 }
 
-void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, bool normalise_brightness,
-                            std::vector<float>& profile) {
+void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, std::vector<float>& profile) {
   profile.assign(crop.width, 0.0f);
   std::vector<uint32_t> sums(crop.width, 0);
   for (int y = crop.y; y < crop.y + crop.height; ++y) {
@@ -44,17 +54,7 @@ void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, bool norm
     for (int x = 0; x < crop.width; ++x) sums[x] += row[x];
   }
   const float scale = 1.0f / (255.0f * static_cast<float>(crop.height));
-  double total = 0.0;
-  for (int x = 0; x < crop.width; ++x) {
-    profile[x] = static_cast<float>(sums[x]) * scale;
-    total += profile[x];
-  }
-  const double mean = total / crop.width;
-  // A black crop has no brightness to normalise: leave it at zero rather than divide by zero.
-  if (normalise_brightness && mean > 1e-6) {
-    const float gain = static_cast<float>(0.5 / mean);
-    for (float& p : profile) p *= gain;
-  }
+  for (int x = 0; x < crop.width; ++x) profile[x] = static_cast<float>(sums[x]) * scale;
 }
 
 namespace {
@@ -113,18 +113,20 @@ Velocity VisualOdometry::Update(const cv::Mat& grey, double dt_s) {
     image_size_ = size;
     vtrans_crop_ = vtrans_crop;
     vrot_crop_ = vrot_crop;
-    ColumnIntensityProfile(grey, vtrans_crop_, config_.normalise_profile_brightness, vtrans_previous_);
-    ColumnIntensityProfile(grey, vrot_crop_, config_.normalise_profile_brightness, vrot_previous_);
+    ColumnIntensityProfile(grey, vtrans_crop_, vtrans_previous_);
+    ColumnIntensityProfile(grey, vrot_crop_, vrot_previous_);
     has_previous_ = true;
     return Velocity{};
   }
 
-  ColumnIntensityProfile(grey, vtrans_crop_, config_.normalise_profile_brightness, vtrans_profile_);
-  ColumnIntensityProfile(grey, vrot_crop_, config_.normalise_profile_brightness, vrot_profile_);
+  ColumnIntensityProfile(grey, vtrans_crop_, vtrans_profile_);
+  ColumnIntensityProfile(grey, vrot_crop_, vrot_profile_);
   const ProfileMatch rotation =
-      BestProfileShift(vrot_profile_, vrot_previous_, config_.max_shift_px, config_.min_overlap_px);
+      BestProfileShift(vrot_profile_, vrot_previous_, config_.max_shift_px, config_.min_overlap_px,
+                       config_.normalise_profile_brightness);
   const ProfileMatch speed =
-      BestProfileShift(vtrans_profile_, vtrans_previous_, config_.max_shift_px, config_.min_overlap_px);
+      BestProfileShift(vtrans_profile_, vtrans_previous_, config_.max_shift_px, config_.min_overlap_px,
+                       config_.normalise_profile_brightness);
   std::swap(vtrans_profile_, vtrans_previous_);
   std::swap(vrot_profile_, vrot_previous_);
 

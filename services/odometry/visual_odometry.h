@@ -3,9 +3,8 @@
 // behaving like OpenRatSLAM's visual_odometry.
 //
 // Each frame, two crops of the grey image (one for rotation, one for speed) are reduced to 1-D
-// column-intensity profiles: column means of the crop, in [0, 1] (optionally rescaled to mean 0.5
-// so a global exposure change does not move the profile). Each profile is compared with the
-// previous frame's profile over shifts s by the mean absolute difference f(s) (eq. 4):
+// column-intensity profiles: column means of the crop, in [0, 1]. Each profile is compared with
+// the previous frame's profile over shifts s by the mean absolute difference f(s) (eq. 4):
 //
 //   rotation:  s_m = argmin_s f(s) over the rotation profile (eq. 5, 7);
 //              dtheta = s_m * camera_fov / image_width;  vrot = dtheta / dt
@@ -17,6 +16,9 @@
 // min(v * vtrans_scaling, vtrans_max); a frame that arrives late (dropped frames) has seen
 // proportionally more image change, so dividing by dt keeps the speed, not the distance, right.
 // The noise floor makes a stationary camera report ~0 m/s (OpenRatSLAM drifts at standstill).
+// With normalise_profile_brightness, f(s) first scales the previous profile's overlap to the
+// current overlap's mean (a per-shift exposure gain), so an exposure change alone is not speed;
+// a pure rotation still gives f(s_m) = 0 because the two overlaps then hold the same columns.
 //
 // Sign convention: shift s > 0 means the current profile is the previous one moved towards
 // larger x (scene moved right in the image), which is what a camera turning left
@@ -48,7 +50,9 @@ struct Velocity {
 
 // f(s) of eq. 4: mean absolute difference between current[n + s] and previous[n] over the
 // overlap of the two profiles (w - |s| entries). Profiles must have equal length > |s|.
-double ShiftedProfileDifference(std::span<const float> current, std::span<const float> previous, int shift);
+// match_gain: previous is first scaled by sum(current overlap) / sum(previous overlap).
+double ShiftedProfileDifference(std::span<const float> current, std::span<const float> previous, int shift,
+                                bool match_gain = false);
 
 struct ProfileMatch {
   int shift = 0;           // argmin_s f(s) (eq. 7); ties go to the smaller |s|
@@ -58,12 +62,10 @@ struct ProfileMatch {
 // Searches |s| <= max_shift with w - |s| > min_overlap, smallest |s| first so equal
 // differences prefer no motion.
 ProfileMatch BestProfileShift(std::span<const float> current, std::span<const float> previous, int max_shift,
-                              int min_overlap);
+                              int min_overlap, bool match_gain = false);
 
-// Column means of grey(y_min..y_max, x_min..x_max) divided by 255, written to profile
-// (resized to the crop width). With normalise_brightness the profile is rescaled to mean 0.5.
-void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, bool normalise_brightness,
-                            std::vector<float>& profile);
+// Column means of grey(crop) divided by 255, written to profile (resized to the crop width).
+void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, std::vector<float>& profile);
 
 class VisualOdometry {
  public:

@@ -27,7 +27,8 @@ struct VisualOdometryConfig {
   int min_overlap_px = 30;       // a shift is tried only if w - |s| > min_overlap_px (000: |s| < w-30)
   // Mean absolute profile difference that is sensor noise, not motion: subtracted before scaling.
   double vtrans_noise_floor = 0.002;
-  // Scale each profile so its mean is 0.5: a global exposure change then moves no profile.
+  // Compare profiles after matching their overlap's mean (exposure gain): a global exposure
+  // change then does not read as speed.
   bool normalise_profile_brightness = true;
 
   template <class V>
@@ -49,7 +50,7 @@ struct VisualOdometryConfig {
     v("vtrans_noise_floor", vtrans_noise_floor,
       "profile difference treated as noise (subtracted before scaling), so standstill gives 0");
     v("normalise_profile_brightness", normalise_profile_brightness,
-      "scale profiles to mean 0.5 so global brightness changes do not read as speed");
+      "match the exposure gain of the compared profiles so brightness changes do not read as speed");
   }
 
   void Validate() const {

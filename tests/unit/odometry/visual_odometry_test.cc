@@ -1,0 +1,221 @@
+// Pins VisualOdometry to paper 000 eqs. 4-7 and OpenRatSLAM's behaviour.
+#include "services/odometry/visual_odometry.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include "common/config/config_loader.h"
+
+namespace rslam::odometry {
+namespace {
+
+// A smooth random texture (deterministic): coarse noise blown up, like blurred scenery.
+cv::Mat Texture(int width, int height, uint64_t seed, int cell = 8) {
+  cv::RNG rng(seed);
+  cv::Mat coarse(height / cell + 2, width / cell + 2, CV_8UC1);
+  rng.fill(coarse, cv::RNG::UNIFORM, 20, 235);
+  cv::Mat fine;
+  cv::resize(coarse, fine, cv::Size(width + 2 * cell, height + 2 * cell), 0, 0, cv::INTER_CUBIC);
+  return fine(cv::Rect(cell, cell, width, height)).clone();
+}
+
+// Frame whose content is `wide` seen from column `offset`: a larger offset moves the scene left.
+cv::Mat View(const cv::Mat& wide, int offset, int width) { return wide(cv::Rect(offset, 0, width, wide.rows)).clone(); }
+
+cv::Mat AddNoise(const cv::Mat& grey, double sigma, uint64_t seed) {
+  cv::RNG rng(seed);
+  cv::Mat noise(grey.size(), CV_16SC1);
+  rng.fill(noise, cv::RNG::NORMAL, 0, sigma);
+  cv::Mat wide, out;
+  grey.convertTo(wide, CV_16SC1);
+  wide += noise;
+  wide.convertTo(out, CV_8UC1);
+  return out;
+}
+
+constexpr double kDt = 0.1;
+
+TEST(VisualOdometryTest, ShiftedProfileDifferenceIsEq4OnHandComputedArrays) {
+  const std::vector<float> previous = {0, 1, 2, 3};
+  const std::vector<float> current = {1, 2, 3, 4};
+  // s = 0: |1-0| |2-1| |3-2| |4-3| -> 1.
+  EXPECT_DOUBLE_EQ(ShiftedProfileDifference(current, previous, 0), 1.0);
+  // s = +1: current[n+1] vs previous[n]: |2-0| |3-1| |4-2| -> 2.
+  EXPECT_DOUBLE_EQ(ShiftedProfileDifference(current, previous, 1), 2.0);
+  // s = -1: current[n] vs previous[n+1]: |1-1| |2-2| |3-3| -> 0.
+  EXPECT_DOUBLE_EQ(ShiftedProfileDifference(current, previous, -1), 0.0);
+  // s = +3: current[3] vs previous[0]: |4-0| / 1 -> 4.
+  EXPECT_DOUBLE_EQ(ShiftedProfileDifference(current, previous, 3), 4.0);
+  EXPECT_THROW(ShiftedProfileDifference(current, previous, 4), std::invalid_argument);
+}
+
+TEST(VisualOdometryTest, BestShiftIsArgminOfEq4AndPrefersNoMotionOnTies) {
+  const std::vector<float> previous = {0, 1, 2, 3, 0, 0};
+  const std::vector<float> moved_right = {9, 0, 1, 2, 3, 0};
+  const ProfileMatch m = BestProfileShift(moved_right, previous, 2, 1);
+  EXPECT_EQ(m.shift, 1);
+  EXPECT_DOUBLE_EQ(m.difference, 0.0);
+  const std::vector<float> flat(6, 0.5f);
+  EXPECT_EQ(BestProfileShift(flat, flat, 3, 1).shift, 0);
+  // The overlap rule (|s| < w - min_overlap) stops the search before max_shift.
+  const std::vector<float> ramp = {0, 1, 2, 3, 4, 5, 6, 7};
+  const std::vector<float> far_right = {9, 9, 9, 9, 9, 9, 0, 1};  // ramp moved right by 6
+  EXPECT_EQ(BestProfileShift(far_right, ramp, 7, 1).shift, 6);      // overlap 2 > 1
+  EXPECT_NE(BestProfileShift(far_right, ramp, 7, 2).shift, 6);      // overlap 2 is not > 2
+}
+
+TEST(VisualOdometryTest, GainMatchingRemovesAnExposureChange) {
+  const std::vector<float> previous = {0.2f, 0.4f, 0.3f, 0.5f};
+  const std::vector<float> brighter = {0.3f, 0.6f, 0.45f, 0.75f};  // x 1.5
+  EXPECT_NEAR(ShiftedProfileDifference(brighter, previous, 0), (0.1 + 0.2 + 0.15 + 0.25) / 4, 1e-6);
+  EXPECT_NEAR(ShiftedProfileDifference(brighter, previous, 0, true), 0.0, 1e-6);
+}
+
+TEST(VisualOdometryTest, FirstFrameReturnsZero) {
+  VisualOdometry vo(VisualOdometryConfig{});
+  const Velocity v = vo.Update(Texture(640, 480, 1), kDt);
+  EXPECT_EQ(v.vtrans, 0.0);
+  EXPECT_EQ(v.vrot, 0.0);
+}
+
+TEST(VisualOdometryTest, SceneMovingRightIsCounterClockwiseRotationOfExpectedMagnitude) {
+  const cv::Mat wide = Texture(760, 480, 2);
+  for (int shift : {12, -12, 25}) {
+    VisualOdometry vo(VisualOdometryConfig{});
+    vo.Update(View(wide, 60, 640), kDt);
+    // Content moved right by `shift` pixels: the camera turned left (counter-clockwise).
+    const Velocity v = vo.Update(View(wide, 60 - shift, 640), kDt);
+    EXPECT_EQ(v.rotation_shift_px, shift);
+    const double expected = shift * (53.0 * std::numbers::pi / 180.0) / 640.0 / kDt;
+    EXPECT_NEAR(v.vrot, expected, 1e-9) << "shift " << shift;
+    // A pure rotation leaves the best-shift difference (eq. 6) small.
+    EXPECT_LT(v.vtrans, 0.5);
+  }
+}
+
+TEST(VisualOdometryTest, RotationRateScalesWithDt) {
+  const cv::Mat wide = Texture(760, 480, 3);
+  VisualOdometry a(VisualOdometryConfig{}), b(VisualOdometryConfig{});
+  a.Update(View(wide, 60, 640), 0.1);
+  b.Update(View(wide, 60, 640), 0.1);
+  const double fast = a.Update(View(wide, 50, 640), 0.1).vrot;
+  const double slow = b.Update(View(wide, 50, 640), 0.2).vrot;
+  EXPECT_GT(fast, 0.0);
+  EXPECT_NEAR(slow, fast / 2.0, 1e-12);
+}
+
+TEST(VisualOdometryTest, StandstillGivesZeroSpeedWithIdenticalAndNoisyFrames) {
+  const cv::Mat scene = Texture(640, 480, 4);
+  VisualOdometry vo(VisualOdometryConfig{});
+  vo.Update(scene, kDt);
+  const Velocity same = vo.Update(scene, kDt);
+  EXPECT_EQ(same.vtrans, 0.0);
+  EXPECT_EQ(same.vrot, 0.0);
+  double worst_speed = 0.0, worst_rotation = 0.0;
+  for (int i = 0; i < 20; ++i) {
+    const Velocity v = vo.Update(AddNoise(scene, 3.0, 100 + i), kDt);
+    worst_speed = std::max(worst_speed, v.vtrans);
+    worst_rotation = std::max(worst_rotation, std::abs(v.vrot));
+  }
+  EXPECT_LT(worst_speed, 0.05);
+  EXPECT_EQ(worst_rotation, 0.0);
+
+  // Without the noise floor the same noise reads as motion (the OpenRatSLAM standstill drift).
+  VisualOdometryConfig no_floor;
+  no_floor.vtrans_noise_floor = 0.0;
+  VisualOdometry drifting(no_floor);
+  drifting.Update(scene, kDt);
+  EXPECT_GT(drifting.Update(AddNoise(scene, 3.0, 7), kDt).vtrans, 0.1);
+}
+
+TEST(VisualOdometryTest, BrightnessChangeAloneDoesNotReadAsSpeed) {
+  const cv::Mat scene = Texture(640, 480, 5);
+  cv::Mat brighter, darker;
+  scene.convertTo(brighter, CV_8UC1, 1.15);
+  scene.convertTo(darker, CV_8UC1, 0.8);
+  VisualOdometry vo(VisualOdometryConfig{});
+  vo.Update(scene, kDt);
+  EXPECT_LT(vo.Update(brighter, kDt).vtrans, 0.5);
+  EXPECT_LT(vo.Update(darker, kDt).vtrans, 0.5);
+
+  VisualOdometryConfig raw;
+  raw.normalise_profile_brightness = false;
+  VisualOdometry unnormalised(raw);
+  unnormalised.Update(scene, kDt);
+  EXPECT_GT(unnormalised.Update(brighter, kDt).vtrans, 5.0);
+}
+
+TEST(VisualOdometryTest, ForwardMotionGivesClampedPositiveSpeed) {
+  const cv::Mat scene = Texture(640, 480, 6);
+  cv::Mat zoomed;
+  cv::resize(scene(cv::Rect(16, 12, 608, 456)), zoomed, scene.size(), 0, 0, cv::INTER_LINEAR);
+  VisualOdometry vo(VisualOdometryConfig{});
+  vo.Update(scene, kDt);
+  const Velocity v = vo.Update(zoomed, kDt);
+  EXPECT_GT(v.vtrans, 1.0);
+  EXPECT_LE(v.vtrans, VisualOdometryConfig{}.vtrans_max);
+  // At the nominal rate vtrans is OpenRatSLAM's min((v - floor) * scaling, max).
+  const VisualOdometryConfig c;
+  EXPECT_NEAR(v.vtrans, std::min((v.speed_difference - c.vtrans_noise_floor) * c.vtrans_scaling, c.vtrans_max), 1e-9);
+}
+
+TEST(VisualOdometryTest, RejectsBadImagesAndDt) {
+  VisualOdometry vo(VisualOdometryConfig{});
+  EXPECT_THROW(vo.Update(cv::Mat(), kDt), std::invalid_argument);
+  EXPECT_THROW(vo.Update(cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(0)), kDt), std::invalid_argument);
+  EXPECT_THROW(vo.Update(cv::Mat(100, 100, CV_8UC1, cv::Scalar(0)), kDt), std::invalid_argument);  // crop outside
+  const cv::Mat scene = Texture(640, 480, 7);
+  for (double dt : {0.0, -0.1, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+    EXPECT_THROW(vo.Update(scene, dt), std::invalid_argument) << dt;
+  }
+  vo.Update(scene, kDt);
+  EXPECT_THROW(vo.Update(Texture(800, 600, 7), kDt), std::invalid_argument);  // size change
+  EXPECT_NO_THROW(vo.Update(scene, kDt));  // the bad frame left the state usable
+  vo.Reset();
+  EXPECT_NO_THROW(vo.Update(Texture(800, 600, 7), kDt));
+}
+
+TEST(VisualOdometryTest, RejectsBadConfigNamingTheKey) {
+  VisualOdometryConfig c;
+  c.vtrans_image_x_max = 100;  // < x_min
+  try {
+    VisualOdometry vo(c);
+    FAIL() << "accepted a bad crop";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.key(), "vtrans_image_x_max");
+  }
+  VisualOdometryConfig fov;
+  fov.camera_fov_deg = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(VisualOdometry{fov}, ConfigError);
+}
+
+TEST(VisualOdometryTest, IratFramesRunWithThePreset) {
+  const char* data = std::getenv("RSLAM_SHARED_DATA");
+  if (!data || !std::filesystem::exists(std::filesystem::path(data) / "irat")) GTEST_SKIP() << "no shared data";
+  VisualOdometryConfig config;
+  LoadConfigSection(LoadYamlFile(std::string(RSLAM_SOURCE_DIR) + "/deploy/presets/irat.yaml"), "odometry", config);
+  VisualOdometry vo(config);
+  int frames = 0;
+  for (int i = 33; i <= 37; ++i) {
+    const cv::Mat grey = cv::imread(std::string(data) + "/irat/test_A_batch_0000" + std::to_string(i) + ".png",
+                                    cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(grey.empty());
+    const Velocity v = vo.Update(grey, 0.1);
+    EXPECT_TRUE(std::isfinite(v.vtrans) && std::isfinite(v.vrot));
+    EXPECT_GE(v.vtrans, 0.0);
+    EXPECT_LE(v.vtrans, config.vtrans_max);
+    ++frames;
+  }
+  EXPECT_EQ(frames, 5);
+}
+
+}  // namespace
+}  // namespace rslam::odometry
