@@ -140,7 +140,7 @@ void CameraRenderer::Render(const Pose2D& pose, uint64_t frame_index, cv::Mat& o
 
   // One ray cast per azimuth.
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
-  const Eigen::Vector2d from(pose.x, pose.y);
+  const Eigen::Vector2d from(pose.x + camera_.forward_offset_m * c, pose.y + camera_.forward_offset_m * s);
   const size_t rays = ray_cos_.size();
   for (size_t k = 0; k < rays; ++k) {
     const Eigen::Vector2d dir(c * ray_cos_[k] - s * ray_sin_[k], s * ray_cos_[k] + c * ray_sin_[k]);

@@ -2,8 +2,9 @@
 // Renders what the robot's camera sees in the simulated world: BGR8 images of textured walls
 // extruded from the occupancy map, a uniform floor and a uniform ceiling/sky.
 //
-// Geometry (pinhole mode): the camera sits at height h above the robot's centre, looking along
-// the robot's heading, tilted down by t. The pixel (u, v) has the ray
+// Geometry (pinhole mode): the camera sits at height h, forward_offset_m ahead of the robot's
+// centre, looking along the robot's heading, tilted down by t (the same model and pixel-centre
+// convention, cx = (W - 1) / 2, as services/occupancy's CameraModel). The pixel (u, v) has the ray
 //   d = forward * (cos t - y sin t) + left * (-x) + up * (-sin t - y cos t),
 //   x = (u + 0.5 - W/2) / f, y = (v + 0.5 - H/2) / f, f = (W/2) / tan(hfov/2),
 // i.e. azimuth a = atan2(-x, cos t - y sin t) and rise per metre s = (-sin t - y cos t) / |d_xy|.

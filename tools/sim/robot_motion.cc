@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace rslam::sim {
 
@@ -167,6 +168,49 @@ StepResult RobotMotion::Step(double dt_s) {
   result.pose = pose_;
   result.idle = !busy();
   return result;
+}
+
+proto::RobotMotionState RobotMotion::SaveState() const {
+  proto::RobotMotionState state;
+  state.set_format_version(1);
+  state.set_x(pose_.x);
+  state.set_y(pose_.y);
+  state.set_theta(pose_.theta);
+  state.set_time_s(time_s_);
+  state.set_command_kind(static_cast<proto::RobotMotionState::CommandKind>(command_.kind));
+  state.set_command_amount(command_.amount);
+  state.set_remaining(remaining_);
+  state.set_target_heading(target_heading_);
+  state.set_pirouette_turns_done(pirouette_turns_done_);
+  state.set_pause_remaining_s(pause_remaining_s_);
+  return state;
+}
+
+void RobotMotion::LoadState(const proto::RobotMotionState& state) {
+  if (state.format_version() != 1) {
+    throw std::invalid_argument("RobotMotion::LoadState: unknown format_version " +
+                                std::to_string(state.format_version()));
+  }
+  for (double v : {state.x(), state.y(), state.theta(), state.time_s(), state.command_amount(), state.remaining(),
+                   state.target_heading(), state.pause_remaining_s()}) {
+    if (!std::isfinite(v)) throw std::invalid_argument("RobotMotion::LoadState: non-finite value");
+  }
+  if (state.pirouette_turns_done() < 0 || state.pause_remaining_s() < 0 || state.time_s() < 0) {
+    throw std::invalid_argument("RobotMotion::LoadState: negative turns, pause or time");
+  }
+  if (!proto::RobotMotionState::CommandKind_IsValid(state.command_kind())) {
+    throw std::invalid_argument("RobotMotion::LoadState: unknown command kind");
+  }
+  if (!world_.IsDiscFree(Eigen::Vector2d(state.x(), state.y()), config_.robot_radius_m)) {
+    throw std::invalid_argument("RobotMotion::LoadState: the robot overlaps a wall at the saved pose");
+  }
+  pose_ = Pose2D{state.x(), state.y(), WrapAngle(state.theta())};
+  time_s_ = state.time_s();
+  command_ = MotionCommand{static_cast<MotionCommand::Kind>(state.command_kind()), state.command_amount()};
+  remaining_ = state.remaining();
+  target_heading_ = state.target_heading();
+  pirouette_turns_done_ = state.pirouette_turns_done();
+  pause_remaining_s_ = state.pause_remaining_s();
 }
 
 }  // namespace rslam::sim

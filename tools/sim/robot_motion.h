@@ -7,13 +7,14 @@
 #include <cstdint>
 
 #include "tools/sim/pose2d.h"
+#include "tools/sim/proto/sim_state.pb.h"
 #include "tools/sim/sim_config.h"
 #include "tools/sim/world_map.h"
 
 namespace rslam::sim {
 
 struct MotionCommand {
-  enum class Kind { kStop, kRotate, kMove, kPirouette };
+  enum class Kind { kStop = 0, kRotate = 1, kMove = 2, kPirouette = 3 };  // as proto CommandKind
   Kind kind = Kind::kStop;
   double amount = 0.0;  // kRotate: radians (left positive); kMove: metres (negative = backwards)
 
@@ -54,6 +55,12 @@ class RobotMotion {
   double time_s() const { return time_s_; }
   bool busy() const { return command_.kind != MotionCommand::Kind::kStop; }
   const MotionConfig& config() const { return config_; }
+
+  // The whole state (pose, time, running command), to save and restore.
+  proto::RobotMotionState SaveState() const;
+  // Throws std::invalid_argument (state unchanged) on an unknown version, non-finite numbers or
+  // a pose where the robot overlaps a wall.
+  void LoadState(const proto::RobotMotionState& state);
 
  private:
   // Turns toward target_heading_ for at most budget seconds; returns the time used.

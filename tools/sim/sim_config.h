@@ -59,6 +59,7 @@ struct CameraConfig {
   double horizontal_fov_rad = 60.0 * M_PI / 180.0;  // paper 003's camera: 60 degrees
   double height_m = 0.3;                             // optical centre above the floor
   double tilt_rad = 0.3;                             // down positive (paper 003 tilts down)
+  double forward_offset_m = 0.0;                     // camera ahead of the robot's centre
   // Panoramic mode (paper 001 local view): columns cover 360 degrees, the centre column looking
   // straight ahead and azimuth decreasing to the right as in a forward camera (the left edge looks
   // behind); rows cover vertical_fov_rad around the tilted horizon; columns whose azimuth is inside
@@ -83,6 +84,7 @@ struct CameraConfig {
     v("horizontal_fov_rad", horizontal_fov_rad, "horizontal field of view (rad); pinhole mode");
     v("height_m", height_m, "camera height above the floor (m)");
     v("tilt_rad", tilt_rad, "camera tilt (rad, down positive)");
+    v("forward_offset_m", forward_offset_m, "camera ahead of the robot's centre of rotation (m)");
     v("panoramic", panoramic, "render a 360-degree cylindrical panorama instead of a pinhole image");
     v("vertical_fov_rad", vertical_fov_rad, "vertical field of view of the panorama (rad)");
     v("dead_zone_center_rad", dead_zone_center_rad, "azimuth of the panorama's masked dead zone (rad)");
@@ -101,6 +103,8 @@ struct CameraConfig {
     Require(std::isfinite(height_m) && height_m > 0 && height_m < 100, "height_m", "must be in (0, 100)");
     Require(std::isfinite(tilt_rad) && std::abs(tilt_rad) < M_PI / 2 - 0.05, "tilt_rad",
             "must be within +-(90 - 3) degrees");
+    Require(std::isfinite(forward_offset_m) && std::abs(forward_offset_m) < 10, "forward_offset_m",
+            "must be within +-10 m");
     Require(std::isfinite(vertical_fov_rad) && vertical_fov_rad > 0.01 &&
                 vertical_fov_rad < M_PI * 170.0 / 180.0,
             "vertical_fov_rad", "must be in (0.01, 170 degrees)");

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace rslam::sim {
 
@@ -27,6 +28,21 @@ WheelOdometryReading WheelOdometry::Measure(double true_distance_m, double true_
   const double distance = true_distance_m + sigma_distance * random_.Gaussian();
   const double rotation = true_rotation_rad + sigma_rotation * random_.Gaussian();
   return WheelOdometryReading{distance / dt_s, rotation / dt_s, dt_s};
+}
+
+proto::WheelOdometryState WheelOdometry::SaveState() const {
+  proto::WheelOdometryState state;
+  state.set_format_version(1);
+  state.set_rng_state(random_.state());
+  return state;
+}
+
+void WheelOdometry::LoadState(const proto::WheelOdometryState& state) {
+  if (state.format_version() != 1) {
+    throw std::invalid_argument("WheelOdometry::LoadState: unknown format_version " +
+                                std::to_string(state.format_version()));
+  }
+  random_.set_state(state.rng_state());
 }
 
 }  // namespace rslam::sim

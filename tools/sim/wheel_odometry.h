@@ -9,6 +9,7 @@
 #include <cstdint>
 
 #include "tools/sim/deterministic_random.h"
+#include "tools/sim/proto/sim_state.pb.h"
 #include "tools/sim/sim_config.h"
 
 namespace rslam::sim {
@@ -29,6 +30,10 @@ class WheelOdometry {
 
   uint64_t rng_state() const { return random_.state(); }
   void set_rng_state(uint64_t state) { random_.set_state(state); }
+
+  proto::WheelOdometryState SaveState() const;
+  // Throws std::invalid_argument on an unknown format_version.
+  void LoadState(const proto::WheelOdometryState& state);
 
  private:
   const WheelOdometryConfig config_;

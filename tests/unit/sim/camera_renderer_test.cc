@@ -52,7 +52,9 @@ BoundaryCheck CheckFloorBoundary(const WorldMap& world, const CameraConfig& cam,
     if (v < 0 || v == cam.height - 1) continue;  // no floor or no wall in this column
     double azimuth = 0;
     const double seen = FloorDistance(cam, renderer.focal_length_px(), u + 0.5, v + 1.0, &azimuth);
-    const double truth = world.CastRay(Eigen::Vector2d(pose.x, pose.y), pose.theta + azimuth).distance;
+    const Eigen::Vector2d camera_position(pose.x + cam.forward_offset_m * std::cos(pose.theta),
+                                          pose.y + cam.forward_offset_m * std::sin(pose.theta));
+    const double truth = world.CastRay(camera_position, pose.theta + azimuth).distance;
     if (truth > max_distance) continue;
     const double error = std::abs(seen - truth) / truth;
     ++check.columns;
@@ -72,6 +74,13 @@ TEST(CameraRendererTest, FloorBoundaryMapsBackToTheWallDistanceInABoxRoom) {
     // Corners, where the distance jumps between neighbouring azimuths, may miss by a ray.
     EXPECT_GE(check.within_3_percent, check.columns - 6) << "theta " << theta << " worst " << check.worst;
   }
+  cam.forward_offset_m = 0.5;  // the camera ahead of the robot's centre sees the wall 0.5 m closer
+  const BoundaryCheck offset = CheckFloorBoundary(world, cam, Pose2D{1.6, 1.5, 0.0}, 10.0);
+  EXPECT_GE(offset.within_3_percent, offset.columns - 6) << "worst " << offset.worst;
+  cam.forward_offset_m = 0.0;
+  cam.tilt_rad = 0.0;  // level camera: the horizon row splits the image
+  const BoundaryCheck level = CheckFloorBoundary(world, cam, Pose2D{1.6, 1.5, 2.0}, 10.0);
+  EXPECT_GE(level.within_3_percent, level.columns - 6) << "worst " << level.worst;
 }
 
 TEST(CameraRendererTest, FloorBoundaryMapsBackToTheWallDistanceInTheUwbRoom) {

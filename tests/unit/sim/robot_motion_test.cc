@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include "tests/unit/sim/test_worlds.h"
 
@@ -135,6 +136,41 @@ TEST(RobotMotionTest, RefusesAStartInsideAWallAndBadInput) {
   EXPECT_THROW(motion.Step(-0.1), std::invalid_argument);
   config.robot_radius_m = -1;
   EXPECT_THROW(RobotMotion(world, config, Pose2D{1.0, 1.0, 0.0}), ConfigError);
+}
+
+}  // namespace
+}  // namespace rslam::sim
+
+namespace rslam::sim {
+namespace {
+
+TEST(RobotMotionTest, SavedStateResumesTheSameTrajectory) {
+  const WorldMap world = testing::BoxRoom(80, 80);
+  MotionConfig config;
+  RobotMotion motion(world, config, Pose2D{1.2, 1.0, 0.3});
+  motion.Command(MotionCommand::Pirouette());
+  for (int i = 0; i < 17; ++i) motion.Step();
+  const proto::RobotMotionState saved = motion.SaveState();
+  std::vector<Pose2D> expected;
+  for (int i = 0; i < 80; ++i) expected.push_back(motion.Step().pose);
+
+  RobotMotion restored(world, config, Pose2D{1.0, 1.0, 0.0});
+  restored.LoadState(saved);
+  EXPECT_TRUE(restored.busy());
+  for (int i = 0; i < 80; ++i) {
+    const Pose2D p = restored.Step().pose;
+    ASSERT_EQ(p.x, expected[i].x);
+    ASSERT_EQ(p.theta, expected[i].theta) << "step " << i;
+  }
+  proto::RobotMotionState bad = saved;
+  bad.set_x(NAN);
+  EXPECT_THROW(restored.LoadState(bad), std::invalid_argument);
+  bad = saved;
+  bad.set_x(0.01);  // inside the wall
+  EXPECT_THROW(restored.LoadState(bad), std::invalid_argument);
+  bad = saved;
+  bad.set_format_version(2);
+  EXPECT_THROW(restored.LoadState(bad), std::invalid_argument);
 }
 
 }  // namespace

@@ -72,3 +72,22 @@ TEST(WheelOdometryTest, RefusesBadInput) {
 
 }  // namespace
 }  // namespace rslam::sim
+
+namespace rslam::sim {
+namespace {
+
+TEST(WheelOdometryTest, SavedStateContinuesTheSameNoise) {
+  WheelOdometry a{WheelOdometryConfig{}};
+  a.Measure(0.1, 0.1, 0.1);
+  const proto::WheelOdometryState saved = a.SaveState();
+  const double next = a.Measure(0.1, 0.1, 0.1).vrot_radps;
+  WheelOdometry b{WheelOdometryConfig{}};
+  b.LoadState(saved);
+  EXPECT_EQ(b.Measure(0.1, 0.1, 0.1).vrot_radps, next);
+  proto::WheelOdometryState bad = saved;
+  bad.set_format_version(0);
+  EXPECT_THROW(b.LoadState(bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rslam::sim
