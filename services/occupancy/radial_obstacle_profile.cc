@@ -102,12 +102,12 @@ void PirouetteProfileBuilder::AddView(const RadialObstacleProfile& view, double 
     int out = static_cast<int>(std::floor((bearing + M_PI) / bin_width_rad_)) % n;
     if (out < 0) out += n;
     Accumulator& acc = bins_[out];
-    acc.nearest_visible = acc.obstacle + acc.free + acc.blind == 0
+    acc.nearest_visible = acc.obstacle_ranges.empty() && acc.free_ranges.empty() && acc.blind == 0
                               ? in.nearest_visible_m
                               : std::min(acc.nearest_visible, in.nearest_visible_m);
     switch (in.status) {
-      case BinStatus::kObstacle: ++acc.obstacle; acc.obstacle_range_sum += in.range_m; break;
-      case BinStatus::kFree: ++acc.free; acc.free_range = std::max(acc.free_range, in.range_m); break;
+      case BinStatus::kObstacle: acc.obstacle_ranges.push_back(in.range_m); break;
+      case BinStatus::kFree: acc.free_ranges.push_back(in.range_m); break;
       case BinStatus::kBlind: ++acc.blind; break;
       case BinStatus::kUnobserved: break;
     }
@@ -124,12 +124,17 @@ RadialObstacleProfile PirouetteProfileBuilder::Build() const {
     const Accumulator& acc = bins_[i];
     RopBin& bin = profile.bins[i];
     bin.nearest_visible_m = acc.nearest_visible;
-    if (acc.obstacle > 0 && acc.obstacle >= acc.free) {
+    double obstacle_mean = 0.0;
+    for (float r : acc.obstacle_ranges) obstacle_mean += r;
+    if (!acc.obstacle_ranges.empty()) obstacle_mean /= acc.obstacle_ranges.size();
+    const auto contradicting = std::count_if(acc.free_ranges.begin(), acc.free_ranges.end(),
+                                             [&](float r) { return r >= obstacle_mean; });
+    if (!acc.obstacle_ranges.empty() && static_cast<long>(acc.obstacle_ranges.size()) >= contradicting) {
       bin.status = BinStatus::kObstacle;
-      bin.range_m = static_cast<float>(acc.obstacle_range_sum / acc.obstacle);
-    } else if (acc.free > 0) {
+      bin.range_m = static_cast<float>(obstacle_mean);
+    } else if (!acc.free_ranges.empty()) {
       bin.status = BinStatus::kFree;
-      bin.range_m = acc.free_range;
+      bin.range_m = *std::max_element(acc.free_ranges.begin(), acc.free_ranges.end());
     } else if (acc.blind > 0) {
       bin.status = BinStatus::kBlind;
       bin.range_m = acc.nearest_visible;

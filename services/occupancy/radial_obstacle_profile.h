@@ -10,6 +10,8 @@
 // along that bearing fall on (the inverse perspective lookup turned around), so a profile costs one
 // mask read per sample. PirouetteProfileBuilder merges the views of a pirouette (12 x 30 degrees
 // in the paper) into a 360-degree profile, averaging the overlapping views.
+// A view that saw free floor only up to a shorter range than an obstacle (its ray left the image
+// first) does not contradict the obstacle, so only free views reaching past it vote against it.
 
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -92,9 +94,9 @@ class PirouetteProfileBuilder {
 
  private:
   struct Accumulator {
-    int obstacle = 0, free = 0, blind = 0;
-    double obstacle_range_sum = 0.0;
-    float free_range = 0.0f;
+    std::vector<float> obstacle_ranges;
+    std::vector<float> free_ranges;
+    int blind = 0;
     float nearest_visible = 0.0f;
   };
   const double bin_width_rad_;

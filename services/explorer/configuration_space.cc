@@ -1,0 +1,60 @@
+#include "services/explorer/configuration_space.h"
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace rslam::explorer {
+
+CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConfig& config) {
+  occupancy.Validate();
+  const int w = occupancy.width, h = occupancy.height;
+  cv::Mat occupied(h, w, CV_8U), unknown(h, w, CV_8U);
+  for (int y = 0; y < h; ++y) {
+    uchar* occ = occupied.ptr<uchar>(y);
+    uchar* unk = unknown.ptr<uchar>(y);
+    const int8_t* row = occupancy.cells.data() + static_cast<size_t>(y) * w;
+    for (int x = 0; x < w; ++x) {
+      const CellClass c = occupancy.Classify(row[x]);
+      occ[x] = c == CellClass::kOccupied ? 1 : 0;
+      unk[x] = c == CellClass::kUnknown ? 1 : 0;
+    }
+  }
+  // One extra cell absorbs quantisation: any point of a free cell is then at least the robot radius
+  // from every occupied cell centre, which is what ExplorationPlanner::IsPathClear checks.
+  const int radius_cells = static_cast<int>(std::ceil(config.robot_radius_m / occupancy.resolution_m)) + 1;
+  {
+    const cv::Mat disc = cv::getStructuringElement(
+        cv::MORPH_ELLIPSE, cv::Size(2 * radius_cells + 1, 2 * radius_cells + 1));
+    cv::dilate(occupied, occupied, disc);
+  }
+  const int f = config.coarse_cell_factor;
+  CoarseGrid grid;
+  grid.width = (w + f - 1) / f;
+  grid.height = (h + f - 1) / f;
+  grid.cell_size_m = occupancy.resolution_m * f;
+  grid.origin_x_m = occupancy.origin_x_m;
+  grid.origin_y_m = occupancy.origin_y_m;
+  grid.cells.assign(static_cast<size_t>(grid.width) * grid.height, CellClass::kFree);
+  // Cells past the map edge count as occupied: the robot never plans to leave the map.
+  for (int cy = 0; cy < grid.height; ++cy) {
+    for (int cx = 0; cx < grid.width; ++cx) {
+      int occ = 0, unk = 0;
+      for (int y = cy * f; y < cy * f + f; ++y) {
+        if (y >= h) { occ += f; continue; }
+        const uchar* o = occupied.ptr<uchar>(y);
+        const uchar* u = unknown.ptr<uchar>(y);
+        for (int x = cx * f; x < cx * f + f; ++x) {
+          if (x >= w) { ++occ; continue; }
+          occ += o[x];
+          unk += u[x];
+        }
+      }
+      grid.cells[static_cast<size_t>(cy) * grid.width + cx] =
+          occ > 0 ? CellClass::kOccupied
+                  : (unk >= config.min_unknown_cells_for_goal ? CellClass::kUnknown : CellClass::kFree);
+    }
+  }
+  return grid;
+}
+
+}  // namespace rslam::explorer

@@ -1,0 +1,184 @@
+#include "services/explorer/exploration_planner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "services/explorer/exploration_transform.h"
+
+namespace rslam::explorer {
+
+namespace {
+
+bool IsFinite(const Pose2D& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
+double NormalizeAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
+
+constexpr int kNeighbourDx[8] = {1, 0, -1, 0, 1, -1, -1, 1};
+constexpr int kNeighbourDy[8] = {0, 1, 0, -1, 1, 1, -1, -1};
+
+}  // namespace
+
+ExplorationPlanner::ExplorationPlanner(ExplorerConfig config) : config_(std::move(config)) {
+  config_.Validate();
+}
+
+void ExplorationPlanner::RecordPirouette(const Pose2D& where) {
+  if (!IsFinite(where)) throw std::invalid_argument("pirouette pose is not finite");
+  last_pirouette_ = where;
+}
+
+bool ExplorationPlanner::IsSetAside(int x, int y) const {
+  return std::any_of(set_aside_.begin(), set_aside_.end(),
+                     [&](const SetAsideGoal& g) { return g.x == x && g.y == y; });
+}
+
+void ExplorationPlanner::SetAside(int x, int y, std::string reason) {
+  if (!IsSetAside(x, y)) set_aside_.push_back({x, y, std::move(reason)});
+}
+
+void ExplorationPlanner::ReportBlocked(const Plan& plan) {
+  if (plan.goal_x < 0) return;
+  if (++blocked_attempts_[{plan.goal_x, plan.goal_y}] >= config_.max_blocked_attempts)
+    SetAside(plan.goal_x, plan.goal_y,
+             "look before you move found the way blocked " + std::to_string(config_.max_blocked_attempts) +
+                 " times");
+}
+
+Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
+  if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
+  const CoarseGrid cs = BuildConfigurationSpace(occupancy, config_);
+  const int rx = cs.CellX(robot.x), ry = cs.CellY(robot.y);
+  if (!cs.Contains(rx, ry)) throw std::invalid_argument("robot is outside the map");
+  const int w = cs.width;
+  const size_t n = cs.cells.size();
+  const size_t robot_index = static_cast<size_t>(ry) * w + rx;
+
+  std::vector<uint8_t> traversable(n), goal(n);
+  for (size_t i = 0; i < n; ++i) {
+    traversable[i] = cs.cells[i] == CellClass::kFree;
+    goal[i] = cs.cells[i] == CellClass::kUnknown;
+  }
+  for (const SetAsideGoal& g : set_aside_) {
+    if (!cs.Contains(g.x, g.y)) continue;
+    const size_t i = static_cast<size_t>(g.y) * w + g.x;
+    traversable[i] = 0;
+    goal[i] = 0;
+  }
+  if (!goal[robot_index]) traversable[robot_index] = 1;  // the robot is there, whatever the map says
+
+  const bool looked_here = last_pirouette_ && cs.CellX(last_pirouette_->x) == rx &&
+                           cs.CellY(last_pirouette_->y) == ry;
+  while (true) {
+    const std::vector<int32_t> cost = ComputeExplorationTransform(cs.width, cs.height, traversable, goal);
+    Plan plan;
+    if (cost[robot_index] == kUnreachable) {
+      plan.complete = true;
+      plan.commands.push_back({MotionCommand::Kind::kStop});
+      plan.reason = "no reachable unknown space remains (" + std::to_string(set_aside_.size()) +
+                    " goals set aside)";
+      return plan;
+    }
+    plan.transform_cost = cost[robot_index];
+    // Descend the transform; path holds free cells, the goal is where the descent would step next.
+    std::vector<std::pair<int, int>> path{{rx, ry}};
+    int gx = rx, gy = ry;
+    if (!goal[robot_index]) {
+      int x = rx, y = ry;
+      auto open = [&](int cx, int cy) {
+        const size_t i = static_cast<size_t>(cy) * w + cx;
+        return traversable[i] || goal[i];
+      };
+      for (size_t guard = 0; guard < n; ++guard) {
+        int best = -1;
+        int64_t best_cost = kUnreachable;
+        for (int k = 0; k < 8; ++k) {
+          const int nx = x + kNeighbourDx[k], ny = y + kNeighbourDy[k];
+          if (!cs.Contains(nx, ny) || !open(nx, ny)) continue;
+          const bool diagonal = k >= 4;
+          if (diagonal && !(open(nx, y) && open(x, ny))) continue;
+          const int32_t c = cost[static_cast<size_t>(ny) * w + nx];
+          if (c == kUnreachable) continue;
+          const int64_t total = int64_t{c} + (diagonal ? kDiagonalStepCost : kStraightStepCost);
+          if (total < best_cost) { best_cost = total; best = k; }
+        }
+        if (best < 0) throw std::logic_error("exploration transform descent found no neighbour");
+        x += kNeighbourDx[best];
+        y += kNeighbourDy[best];
+        if (goal[static_cast<size_t>(y) * w + x]) { gx = x; gy = y; break; }
+        path.emplace_back(x, y);
+      }
+    }
+    plan.goal_x = gx;
+    plan.goal_y = gy;
+    if (path.size() == 1) {
+      // The unknown is here or next door: look, unless we already have.
+      if (looked_here) {
+        SetAside(gx, gy, "still unknown after a pirouette at the nearest reachable cell");
+        const size_t gi = static_cast<size_t>(gy) * w + gx;
+        goal[gi] = 0;
+        traversable[gi] = gi == robot_index;
+        continue;
+      }
+      plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
+                               config_.pirouette_steps});
+      plan.reason = "unknown space next to the robot: pirouette";
+      plan.has_target = true;
+      plan.target = robot;
+      return plan;
+    }
+    // Piece-wise linear motion: one waypoint per run of equal steps.
+    std::vector<std::pair<double, double>> waypoints;
+    const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
+    if (off_centre > 0.25 * cs.cell_size_m) waypoints.emplace_back(cs.CentreX(rx), cs.CentreY(ry));
+    for (size_t i = 1; i < path.size(); ++i) {
+      const bool run_ends = i + 1 == path.size() ||
+                            path[i + 1].first - path[i].first != path[i].first - path[i - 1].first ||
+                            path[i + 1].second - path[i].second != path[i].second - path[i - 1].second;
+      if (run_ends) waypoints.emplace_back(cs.CentreX(path[i].first), cs.CentreY(path[i].second));
+    }
+    double x = robot.x, y = robot.y, theta = robot.theta;
+    for (const auto& [wx, wy] : waypoints) {
+      const double distance = std::hypot(wx - x, wy - y);
+      if (distance < 1e-9) continue;
+      const double heading = std::atan2(wy - y, wx - x);
+      const double turn = NormalizeAngle(heading - theta);
+      if (std::abs(turn) > 1e-9) plan.commands.push_back({MotionCommand::Kind::kRotate, turn, 0.0, 0});
+      plan.commands.push_back({MotionCommand::Kind::kMove, 0.0, distance, 0});
+      x = wx;
+      y = wy;
+      theta = heading;
+    }
+    plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
+                             config_.pirouette_steps});
+    plan.has_target = true;
+    plan.target = {x, y, theta};
+    plan.reason = "to the nearest unknown space, " + std::to_string(path.size() - 1) + " cells away";
+    return plan;
+  }
+}
+
+bool ExplorationPlanner::IsPathClear(const GridView& occupancy, const Pose2D& from, double distance_m) const {
+  occupancy.Validate();
+  if (!IsFinite(from) || !std::isfinite(distance_m)) throw std::invalid_argument("pose or distance not finite");
+  const double x0 = from.x, y0 = from.y;
+  const double x1 = x0 + distance_m * std::cos(from.theta), y1 = y0 + distance_m * std::sin(from.theta);
+  const double r = config_.robot_radius_m, res = occupancy.resolution_m;
+  const int cx_min = static_cast<int>(std::floor((std::min(x0, x1) - r - occupancy.origin_x_m) / res));
+  const int cx_max = static_cast<int>(std::floor((std::max(x0, x1) + r - occupancy.origin_x_m) / res));
+  const int cy_min = static_cast<int>(std::floor((std::min(y0, y1) - r - occupancy.origin_y_m) / res));
+  const int cy_max = static_cast<int>(std::floor((std::max(y0, y1) + r - occupancy.origin_y_m) / res));
+  const double sx = x1 - x0, sy = y1 - y0, len2 = sx * sx + sy * sy;
+  for (int cy = cy_min; cy <= cy_max; ++cy) {
+    for (int cx = cx_min; cx <= cx_max; ++cx) {
+      const double px = occupancy.origin_x_m + (cx + 0.5) * res, py = occupancy.origin_y_m + (cy + 0.5) * res;
+      const double t = len2 > 0 ? std::clamp(((px - x0) * sx + (py - y0) * sy) / len2, 0.0, 1.0) : 0.0;
+      const double d = std::hypot(px - (x0 + t * sx), py - (y0 + t * sy));
+      if (d > r) continue;
+      if (cx < 0 || cy < 0 || cx >= occupancy.width || cy >= occupancy.height) return false;
+      if (occupancy.ClassAt(cx, cy) == CellClass::kOccupied) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace rslam::explorer

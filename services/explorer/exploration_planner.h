@@ -1,0 +1,87 @@
+#pragma once
+// Exploration by the distance transform (paper 003 section 4). Each call to PlanFrom:
+//  1. builds the configuration space on the coarse exploration grid (configuration_space.h);
+//  2. marks every reachable unknown coarse cell as a goal and runs the exploration transform
+//     (exploration_transform.h); if the robot's cell cannot reach any goal, exploration is
+//     complete;
+//  3. descends the transform from the robot's cell to the last free cell before the nearest
+//     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
+//     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees).
+// "Look before you move": before each straight move the caller asks IsPathClear with the latest
+// grid and replans if it is blocked (ReportBlocked counts that against the goal). Goals that stay
+// unknown after the robot has looked at them from next door, or that keep being blocked, are set
+// aside with a reason, so exploration always ends.
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "services/explorer/configuration_space.h"
+#include "services/explorer/explorer_config.h"
+#include "services/explorer/grid_view.h"
+
+namespace rslam::explorer {
+
+struct MotionCommand {
+  enum class Kind { kRotate, kMove, kPirouette, kStop };
+  Kind kind = Kind::kStop;
+  double angle_rad = 0.0;   // kRotate: turn (counter-clockwise positive); kPirouette: one step
+  double distance_m = 0.0;  // kMove: straight ahead (metres)
+  int steps = 0;            // kPirouette: number of angle_rad turns, looking after each
+};
+
+struct Plan {
+  bool complete = false;  // no reachable unknown space remains
+  std::vector<MotionCommand> commands;
+  std::string reason;
+  bool has_target = false;
+  Pose2D target;          // where the robot ends (heading of the last move)
+  int goal_x = -1;        // coarse cell of the unknown space the plan heads for
+  int goal_y = -1;
+  int32_t transform_cost = 0;  // exploration transform at the robot's cell
+};
+
+struct SetAsideGoal {
+  int x = 0;  // coarse cell
+  int y = 0;
+  std::string reason;
+};
+
+class ExplorationPlanner {
+ public:
+  explicit ExplorationPlanner(ExplorerConfig config);
+  ExplorationPlanner(const ExplorationPlanner&) = delete;
+  ExplorationPlanner& operator=(const ExplorationPlanner&) = delete;
+
+  // Throws std::invalid_argument for an invalid view, a non-finite pose or a robot off the map.
+  Plan PlanFrom(const GridView& occupancy, const Pose2D& robot);
+
+  // Look before you move: true when no occupied cell (or cell off the map) lies within the robot
+  // radius of the straight segment from `from` along its heading for distance_m (negative =
+  // backwards).
+  bool IsPathClear(const GridView& occupancy, const Pose2D& from, double distance_m) const;
+
+  // The robot has finished a pirouette at this pose.
+  void RecordPirouette(const Pose2D& where);
+  // A move of this plan was blocked when looked at; after max_blocked_attempts its goal is set aside.
+  void ReportBlocked(const Plan& plan);
+
+  const std::vector<SetAsideGoal>& set_aside_goals() const { return set_aside_; }
+  const ExplorerConfig& config() const { return config_; }
+
+ private:
+  void SetAside(int x, int y, std::string reason);
+  bool IsSetAside(int x, int y) const;
+
+  const ExplorerConfig config_;
+  std::optional<Pose2D> last_pirouette_;
+  std::map<std::pair<int, int>, int> blocked_attempts_;
+  std::vector<SetAsideGoal> set_aside_;
+  std::vector<uint8_t> set_aside_mask_;  // over the last coarse grid's cells
+  int mask_width_ = 0, mask_height_ = 0;
+};
+
+}  // namespace rslam::explorer

@@ -1,0 +1,37 @@
+#pragma once
+// Configuration of the exploration planner (paper 003 section 4).
+
+#include <cmath>
+
+#include "common/config/config_error.h"
+
+namespace rslam::explorer {
+
+struct ExplorerConfig {
+  double robot_radius_m = 0.12;       // obstacles are dilated by this (configuration space)
+  int coarse_cell_factor = 4;         // exploration cell = factor x occupancy cell
+  int min_unknown_cells_for_goal = 1; // occupancy cells unknown in a coarse cell to make it a goal
+  int pirouette_steps = 12;           // paper 003: 12 x 30 degrees
+  int max_blocked_attempts = 3;       // look-before-you-move failures before a goal is set aside
+
+  template <class V>
+  void VisitFields(V& v) {
+    v("robot_radius_m", robot_radius_m, "robot radius; obstacles are dilated by it (m)");
+    v("coarse_cell_factor", coarse_cell_factor, "exploration grid cell = this many occupancy cells");
+    v("min_unknown_cells_for_goal", min_unknown_cells_for_goal,
+      "unknown occupancy cells needed to make an exploration cell a goal");
+    v("pirouette_steps", pirouette_steps, "rotations of one pirouette (360 / steps degrees each)");
+    v("max_blocked_attempts", max_blocked_attempts,
+      "blocked moves towards one goal before it is set aside");
+  }
+  void Validate() const {
+    Require(std::isfinite(robot_radius_m) && robot_radius_m >= 0 && robot_radius_m < 10,
+            "robot_radius_m", "must be in [0, 10)");
+    Require(coarse_cell_factor >= 1 && coarse_cell_factor <= 64, "coarse_cell_factor", "must be 1..64");
+    Require(min_unknown_cells_for_goal >= 1, "min_unknown_cells_for_goal", "must be >= 1");
+    Require(pirouette_steps >= 1 && pirouette_steps <= 360, "pirouette_steps", "must be 1..360");
+    Require(max_blocked_attempts >= 1, "max_blocked_attempts", "must be >= 1");
+  }
+};
+
+}  // namespace rslam::explorer

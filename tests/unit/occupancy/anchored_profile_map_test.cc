@@ -1,0 +1,89 @@
+#include "services/occupancy/anchored_profile_map.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+
+namespace rslam::occupancy {
+namespace {
+
+GridConfig Grid() { return GridConfig{0.02, 200, 200, -2.0, -2.0}; }
+SensorModelConfig Model() {
+  SensorModelConfig m;
+  m.reliable_range_m = 0.5;
+  return m;
+}
+// An obstacle 0.315 m straight ahead of the robot, nothing else.
+RadialObstacleProfile ObstacleAhead() {
+  RadialObstacleProfile p;
+  p.first_bearing_rad = -0.005;
+  p.bin_width_rad = 0.01;
+  p.bins.push_back(RopBin{0.315f, 0.07f, BinStatus::kObstacle});
+  return p;
+}
+
+TEST(AnchoredProfileMapTest, MovingAnExperienceMovesItsProfilesCells) {
+  AnchoredProfileMap map(Grid(), Model());
+  const Pose2D experience{0.5, 0.0, 0.0};
+  const Pose2D robot{0.61, 0.11, M_PI / 2};  // 11 cm ahead and left of the experience, facing +y
+  map.AddProfile(7, experience, robot, ObstacleAhead());
+  const CellIndex before = map.grid().CellOf(0.61, 0.425);
+  EXPECT_GT(map.grid().Probability(before), 0.6);
+
+  // Loop closure moves experience 7 by (-1, +0.2) and turns it by +90 degrees.
+  const std::map<uint64_t, Pose2D> corrected{{7, {-0.5, 0.2, M_PI / 2}}};
+  const size_t moved = map.Rebuild([&](uint64_t id) -> std::optional<Pose2D> {
+    auto it = corrected.find(id);
+    return it == corrected.end() ? std::nullopt : std::optional<Pose2D>(it->second);
+  });
+  EXPECT_EQ(moved, 1u);
+  // Robot offset (0.11, 0.11, +90 deg) from the corrected experience: robot at (-0.61, 0.31)
+  // facing -x, so the obstacle is now at (-0.925, 0.31) and the old cell is unknown again.
+  EXPECT_FALSE(map.grid().IsKnown(before));
+  EXPECT_GT(map.grid().Probability(map.grid().CellOf(-0.925, 0.31)), 0.6);
+}
+
+TEST(AnchoredProfileMapTest, UnknownExperiencesKeepTheirPoseOnRebuild) {
+  AnchoredProfileMap map(Grid(), Model());
+  map.AddProfile(1, {0, 0, 0}, {0, 0, 0}, ObstacleAhead());
+  const std::vector<int8_t> before = map.grid().ToRosCells();
+  EXPECT_EQ(map.Rebuild([](uint64_t) { return std::nullopt; }), 0u);
+  EXPECT_EQ(map.grid().ToRosCells(), before);
+}
+
+TEST(AnchoredProfileMapTest, SavedStateLoadsIntoTheSameGrid) {
+  AnchoredProfileMap map(Grid(), Model());
+  map.AddProfile(1, {0, 0, 0}, {0.1, 0.0, 0.2}, ObstacleAhead());
+  map.AddProfile(2, {0.5, 0.5, 1.0}, {0.4, 0.6, 2.0}, ObstacleAhead());
+  map.Rebuild([](uint64_t id) -> std::optional<Pose2D> {
+    if (id == 2) return Pose2D{0.45, 0.55, 1.1};
+    return std::nullopt;
+  });
+  const std::string bytes = map.ToProto().SerializeAsString();
+  proto::OccupancyState state;
+  ASSERT_TRUE(state.ParseFromString(bytes));
+  const AnchoredProfileMap loaded = AnchoredProfileMap::FromProto(state);
+  ASSERT_EQ(loaded.profiles().size(), 2u);
+  EXPECT_EQ(loaded.profiles()[1].experience_id, 2u);
+  EXPECT_DOUBLE_EQ(loaded.profiles()[1].experience_pose.theta, 1.1);
+  EXPECT_EQ(loaded.grid().ToRosCells(), map.grid().ToRosCells());
+  EXPECT_EQ(loaded.grid().grid_config().width, 200);
+}
+
+TEST(AnchoredProfileMapTest, RefusesCorruptStateWhole) {
+  AnchoredProfileMap map(Grid(), Model());
+  map.AddProfile(1, {0, 0, 0}, {0, 0, 0}, ObstacleAhead());
+  proto::OccupancyState bad_status = map.ToProto();
+  bad_status.mutable_profiles(0)->set_status(std::string(1, '\x09'));
+  EXPECT_THROW(AnchoredProfileMap::FromProto(bad_status), std::invalid_argument);
+  proto::OccupancyState short_ranges = map.ToProto();
+  short_ranges.mutable_profiles(0)->clear_range_m();
+  EXPECT_THROW(AnchoredProfileMap::FromProto(short_ranges), std::invalid_argument);
+  proto::OccupancyState bad_grid = map.ToProto();
+  bad_grid.mutable_grid()->set_resolution_m(-1);
+  EXPECT_THROW(AnchoredProfileMap::FromProto(bad_grid), std::invalid_argument);
+  EXPECT_THROW(map.AddProfile(1, {NAN, 0, 0}, {0, 0, 0}, ObstacleAhead()), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rslam::occupancy
