@@ -1,11 +1,15 @@
 # Small helpers shared by every CMakeLists.txt of the project.
 
-# Adds every immediate subfolder of DIR that has a CMakeLists.txt, in name order.
+# Adds every immediate subfolder of DIR that has a CMakeLists.txt, in name order. For work on
+# one part of the tree, -DRSLAM_ONLY="bus;odometry" adds only subfolders with those names.
 function(rslam_add_subdirectories dir)
   file(GLOB children LIST_DIRECTORIES true RELATIVE ${CMAKE_CURRENT_SOURCE_DIR}/${dir}
        ${CMAKE_CURRENT_SOURCE_DIR}/${dir}/*)
   list(SORT children)
   foreach(child ${children})
+    if(RSLAM_ONLY AND NOT child IN_LIST RSLAM_ONLY)
+      continue()
+    endif()
     if(EXISTS ${CMAKE_CURRENT_SOURCE_DIR}/${dir}/${child}/CMakeLists.txt)
       add_subdirectory(${dir}/${child})
     endif()

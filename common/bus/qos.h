@@ -1,0 +1,34 @@
+#pragma once
+// The one QoS table. Every topic uses one of these presets; both vendors get every field set
+// explicitly (their defaults differ: Fast DDS writers default to transient-local, Cyclone to
+// volatile), so a Cyclone endpoint and a Fast DDS endpoint with the same preset always match.
+
+#include <cstdint>
+#include <string_view>
+
+namespace rslam::bus {
+
+enum class QosPreset {
+  // Camera images: reliable, keep-last 8, volatile. A slow reader loses old frames rather
+  // than stalling the camera; a camera that must lose nothing waits for acknowledgments.
+  kSensor,
+  // Odometry, views, actions, commands: reliable, keep-all, volatile. Nothing is lost; a slow
+  // reader applies back-pressure (the writer blocks up to max_blocking_ms).
+  kStream,
+  // Maps, grids, status: reliable, transient-local, keep-last 1 per instance (robot), so a
+  // service that (re)starts gets the latest at once.
+  kState,
+};
+
+struct QosSettings {
+  bool reliable;
+  bool keep_all;
+  int32_t depth;            // keep-last depth (ignored for keep-all)
+  bool transient_local;
+  int32_t max_blocking_ms;  // how long a reliable writer may block on a full reader
+};
+
+QosSettings SettingsOf(QosPreset preset);
+std::string_view PresetName(QosPreset preset);
+
+}  // namespace rslam::bus

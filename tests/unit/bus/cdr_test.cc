@@ -1,0 +1,81 @@
+// The XCDR1 encoding, byte for byte, against hand-computed buffers.
+
+#include <gtest/gtest.h>
+
+#include "common/bus/typed_cdr.h"
+#include "rslam/msg/all_messages.h"
+
+namespace rslam::bus {
+namespace {
+
+TEST(CdrTest, VelocityEncodesAsXcdr1LittleEndianWithAlignment) {
+  msg::Velocity v;
+  v.header = {"ab", 1, -2};
+  v.vtrans_mps = 1.5;
+  v.vrot_radps = 0;
+  v.dt_s = 0;
+  v.source = msg::VelocitySource::VELOCITY_WHEEL;
+  const std::vector<uint8_t> cdr = ToCdr(v);
+  const std::vector<uint8_t> expected = {
+      0x00, 0x01, 0x00, 0x00,                          // encapsulation CDR_LE
+      0x03, 0x00, 0x00, 0x00, 'a', 'b', 0x00,          // string "ab" with NUL
+      0x00,                                            // pad to 8 (offset 8 after header)
+      0x01, 0, 0, 0, 0, 0, 0, 0,                        // frame_seq
+      0xFE, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF,  // stamp_ns = -2
+      0, 0, 0, 0, 0, 0, 0xF8, 0x3F,                    // 1.5
+      0, 0, 0, 0, 0, 0, 0, 0,                          // 0.0
+      0, 0, 0, 0, 0, 0, 0, 0,                          // 0.0
+      0x01, 0, 0, 0,                                   // enum VELOCITY_WHEEL
+  };
+  EXPECT_EQ(cdr, expected);
+  EXPECT_EQ(FromCdr<msg::Velocity>(cdr), v);
+}
+
+TEST(CdrTest, KeyIsTheBigEndianRobotId) {
+  msg::ServiceStatus s;
+  s.header.robot_id = "r1";
+  s.service = "odo";
+  CdrKeyWriter key;
+  ReadKey<msg::ServiceStatus>(ToCdr(s), key);
+  const std::vector<uint8_t> expected = {0, 0, 0, 3, 'r', '1', 0, 0, 0, 0, 0, 4, 'o', 'd', 'o', 0};
+  EXPECT_EQ(key.bytes(), expected);
+}
+
+TEST(CdrTest, BigEndianInputDecodes) {
+  // Header alone, encoded big-endian by hand: robot "x", frame 258, stamp 1.
+  const std::vector<uint8_t> be = {0x00, 0x00, 0x00, 0x00, 0, 0, 0, 2, 'x', 0, 0, 0,
+                                   0, 0, 0, 0, 0, 0, 1, 2, 0, 0, 0, 0, 0, 0, 0, 1};
+  CdrReader reader(be);
+  msg::Header h;
+  Deserialize(reader, h);
+  EXPECT_EQ(h.robot_id, "x");
+  EXPECT_EQ(h.frame_seq, 258u);
+  EXPECT_EQ(h.stamp_ns, 1);
+}
+
+TEST(CdrTest, TruncatedOrCorruptMessagesAreRefused) {
+  msg::Image image;
+  FillExample(image, 1);
+  std::vector<uint8_t> cdr = ToCdr(image);
+  for (std::size_t cut : {std::size_t{0}, std::size_t{3}, std::size_t{10}, cdr.size() - 1}) {
+    std::vector<uint8_t> part(cdr.begin(), cdr.begin() + static_cast<long>(cut));
+    EXPECT_THROW(FromCdr<msg::Image>(part), CdrError) << "cut at " << cut;
+  }
+  // A sequence count far beyond the buffer must not allocate.
+  std::vector<uint8_t> huge = cdr;
+  const std::size_t count_at = huge.size() - image.data.size() - 4;
+  huge[count_at + 3] = 0x7F;
+  EXPECT_THROW(FromCdr<msg::Image>(huge), CdrError);
+  // An unknown enum value is refused.
+  msg::Velocity v;
+  std::vector<uint8_t> vel = ToCdr(v);
+  vel[vel.size() - 4] = 9;
+  EXPECT_THROW(FromCdr<msg::Velocity>(vel), CdrError);
+  // XCDR2 or parameter-list encodings are refused.
+  std::vector<uint8_t> xcdr2 = cdr;
+  xcdr2[1] = 0x07;
+  EXPECT_THROW(FromCdr<msg::Image>(xcdr2), CdrError);
+}
+
+}  // namespace
+}  // namespace rslam::bus
