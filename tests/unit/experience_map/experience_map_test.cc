@@ -1,0 +1,370 @@
+// Pins the experience map against paper 000 eqs. 1-3, the budgeted correction's fixed point,
+// paths over links, persistence, merging and bad input.
+#include "services/experience_map/experience_map.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <vector>
+
+#include "common/persistence/state_file.h"
+
+namespace rslam::experience_map {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+using Kind = ExperienceAction::Kind;
+
+ExperienceAction Create(uint32_t id, uint32_t from) {
+  ExperienceAction a;
+  a.kind = Kind::kCreate;
+  a.experience_id = id;
+  a.from_experience_id = from;
+  a.template_id = id;
+  return a;
+}
+
+ExperienceAction LinkTo(Kind kind, uint32_t from, uint32_t to) {
+  ExperienceAction a;
+  a.kind = kind;
+  a.experience_id = to;
+  a.from_experience_id = from;
+  return a;
+}
+
+// A 10 m square driven in 2 m steps from (0, 0) facing +y (exp_initial_em_deg 90), creating an
+// experience per step, turning to the start heading and closing the loop onto experience 0. Odometry is scaled by `scale` and
+// turns by `bias` rad per step too much. Returns the true positions of experiences 0..19.
+std::vector<std::pair<double, double>> DriveSquare(ExperienceMap& map, double scale, double bias) {
+  std::vector<std::pair<double, double>> truth;
+  double tx = 0, ty = 0, tth = kPi / 2;
+  map.Apply(Create(0, kNoExperience));
+  truth.emplace_back(tx, ty);
+  uint32_t next = 1;
+  for (int side = 0; side < 4; ++side) {
+    for (int step = 0; step < 5; ++step) {
+      if (step == 0 && side > 0) {
+        map.Integrate(0.0, kPi / 2 + bias, 1.0);
+        tth += kPi / 2;
+      }
+      map.Integrate(2.0 * scale, bias, 1.0);
+      tx += 2.0 * std::cos(tth);
+      ty += 2.0 * std::sin(tth);
+      if (side == 3 && step == 4) {
+        map.Integrate(0.0, kPi / 2 + bias, 1.0);  // face the way experience 0 was seen
+        map.Apply(LinkTo(Kind::kLink, next - 1, 0));
+      } else {
+        map.Apply(Create(next, next - 1));
+        truth.emplace_back(tx, ty);
+        ++next;
+      }
+    }
+  }
+  return truth;
+}
+
+// RMS over all pairs of |distance in the map - true distance| (invariant to rigid motion).
+double ShapeError(const ExperienceMap& map, const std::vector<std::pair<double, double>>& truth) {
+  double sum = 0;
+  int n = 0;
+  const auto& e = map.experiences();
+  for (size_t i = 0; i < truth.size(); ++i)
+    for (size_t j = i + 1; j < truth.size(); ++j) {
+      const double dm = std::hypot(e[i].x_m - e[j].x_m, e[i].y_m - e[j].y_m);
+      const double dt = std::hypot(truth[i].first - truth[j].first, truth[i].second - truth[j].second);
+      sum += (dm - dt) * (dm - dt);
+      ++n;
+    }
+  return std::sqrt(sum / n);
+}
+
+ExperienceMapConfig NoCorrection() {
+  ExperienceMapConfig c;
+  c.exp_relax_budget_links = 0;
+  c.exp_loops = 0;
+  return c;
+}
+
+TEST(ExperienceMap, CreatePlacesExperienceAtAccumulatedOdometryWithEq1Link) {
+  ExperienceMap map(NoCorrection());
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(1.0, 0.0, 2.0);  // facing +y (90 degrees)
+  map.Apply(Create(1, 0));
+  ASSERT_EQ(map.experiences().size(), 2u);
+  const Experience& e1 = map.experiences()[1];
+  EXPECT_NEAR(e1.x_m, 0.0, 1e-12);
+  EXPECT_NEAR(e1.y_m, 2.0, 1e-12);
+  EXPECT_NEAR(e1.th_rad, kPi / 2, 1e-12);
+  ASSERT_EQ(map.links().size(), 1u);
+  const Link& l = map.links()[0];
+  EXPECT_EQ(l.from_id, 0u);
+  EXPECT_EQ(l.to_id, 1u);
+  EXPECT_NEAR(l.d_m, 2.0, 1e-12);
+  EXPECT_NEAR(l.heading_rad, 0.0, 1e-12);
+  EXPECT_NEAR(l.facing_rad, 0.0, 1e-12);
+  EXPECT_NEAR(l.travel_time_s, 2.0, 1e-12);
+  EXPECT_EQ(map.current_id(), 1u);
+  map.Integrate(0.5, 0.0, 1.0);
+  EXPECT_NEAR(map.RobotPose().y_m, 2.5, 1e-12);
+}
+
+TEST(ExperienceMap, RepeatedTransitionAveragesLinkByEq2) {
+  ExperienceMap map(NoCorrection());
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(1.0, 0.0, 2.0);
+  map.Apply(Create(1, 0));  // 0 -> 1: d 2, heading 0, facing 0, 2 s
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(2, 1));
+  map.Apply(LinkTo(Kind::kLink, 2, 0));  // back at 0 (teleport: a new link 2 -> 0)
+  // Second traversal 0 -> 1: 2.2 m along a direction turned 0.1 rad, in 1 s.
+  map.Integrate(2.2, 0.1, 1.0);
+  map.Apply(LinkTo(Kind::kSet, 0, 1));
+  const Link& l = map.links()[0];
+  ASSERT_EQ(l.from_id, 0u);
+  ASSERT_EQ(l.to_id, 1u);
+  // By hand: mean of (2, 0) and 2.2 (cos 0.1, sin 0.1) = (2.094505, 0.109817).
+  EXPECT_NEAR(l.d_m, 2.0973815016852937, 1e-9);
+  EXPECT_NEAR(l.heading_rad, 0.05238293398366595, 1e-9);
+  EXPECT_NEAR(l.facing_rad, 0.05, 1e-12);
+  EXPECT_NEAR(l.travel_time_s, 1.5, 1e-12);
+  EXPECT_EQ(l.traversals, 2u);
+  EXPECT_EQ(map.links().size(), 3u);  // no duplicate link
+}
+
+proto::ExperienceMap TwoExperiencesOneMetreOff() {
+  proto::ExperienceMap m;
+  auto* a = m.add_experiences();
+  a->set_x_m(0.0);
+  auto* b = m.add_experiences();
+  b->set_x_m(3.0);
+  auto* l = m.add_links();
+  l->set_from_id(0);
+  l->set_to_id(1);
+  l->set_d_m(2.0);
+  l->set_traversals(1);
+  m.set_has_current(true);
+  m.set_current_id(1);
+  return m;
+}
+
+TEST(ExperienceMap, CorrectionShrinksLinkErrorByOneMinusTwoAlpha) {
+  for (double alpha : {0.5, 0.25, 0.1}) {
+    ExperienceMapConfig cfg;
+    cfg.exp_correction = alpha;
+    ExperienceMap map(cfg);
+    map.Load(TwoExperiencesOneMetreOff());
+    ASSERT_NEAR(map.MaxLinkError(), 1.0, 1e-12);
+    map.Relax(1);
+    // 000 eq. 3: each end moves alpha * error towards the other.
+    EXPECT_NEAR(map.experiences()[0].x_m, alpha, 1e-12);
+    EXPECT_NEAR(map.experiences()[1].x_m, 3.0 - alpha, 1e-12);
+    EXPECT_NEAR(map.MaxLinkError(), 1.0 - 2 * alpha, 1e-12) << alpha;
+  }
+}
+
+TEST(ExperienceMap, DriftedSquareLoopIsCorrectedTowardsTheTrueSquare) {
+  // Heading drift is what map correction can undo (a pure scale error keeps every loop
+  // consistent, so no correction can see it).
+  ExperienceMap uncorrected(NoCorrection());
+  const auto truth = DriveSquare(uncorrected, 1.0, 0.03);
+  ExperienceMapConfig cfg;
+  cfg.exp_relax_budget_links = 0;  // OpenRatSLAM: exp_loops sweeps after every action
+  cfg.exp_loops = 100;
+  ExperienceMap corrected(cfg);
+  DriveSquare(corrected, 1.0, 0.03);
+  const double before = ShapeError(uncorrected, truth);
+  const double after = ShapeError(corrected, truth);
+  EXPECT_GT(before, 1.0);
+  EXPECT_LT(after, 0.35 * before) << "before " << before << " after " << after;
+}
+
+TEST(ExperienceMap, BudgetedCorrectionConvergesToFullRelaxationFixedPoint) {
+  ExperienceMap built(NoCorrection());
+  DriveSquare(built, 1.05, 0.03);
+  const proto::ExperienceMap start = built.Save();
+
+  ExperienceMapConfig full_cfg;
+  ExperienceMap full(full_cfg);
+  full.Load(start);
+  full.Relax(3000);
+
+  ExperienceMapConfig sliced_cfg;
+  sliced_cfg.exp_relax_budget_links = 5;  // far less than one sweep (20 links) per frame
+  sliced_cfg.exp_local_region_links = 3;
+  ExperienceMap sliced(sliced_cfg);
+  sliced.Load(start);
+  ExperienceMapConfig probe;
+  for (int frame = 0; frame < 30000; ++frame) sliced.Apply(ExperienceAction{});
+
+  ASSERT_EQ(sliced.experiences().size(), full.experiences().size());
+  for (size_t i = 0; i < full.experiences().size(); ++i) {
+    EXPECT_NEAR(sliced.experiences()[i].x_m, full.experiences()[i].x_m, 1e-6) << i;
+    EXPECT_NEAR(sliced.experiences()[i].y_m, full.experiences()[i].y_m, 1e-6) << i;
+    EXPECT_NEAR(sliced.experiences()[i].th_rad, full.experiences()[i].th_rad, 1e-6) << i;
+  }
+}
+
+TEST(ExperienceMap, LocalRegionCorrectsALoopClosureWithinAFewFrames) {
+  ExperienceMapConfig cfg;
+  cfg.exp_relax_budget_links = 100;
+  cfg.exp_local_region_links = 50;
+  ExperienceMap map(cfg);
+  DriveSquare(map, 1.05, 0.03);
+  ExperienceMap full(cfg);
+  full.Load(map.Save());
+  full.Relax(2000);
+  ExperienceMap uncorrected(NoCorrection());
+  DriveSquare(uncorrected, 1.05, 0.03);
+  for (int frame = 0; frame < 20; ++frame) map.Apply(ExperienceAction{});
+  // Twenty frames after the closure the map is about as consistent as fully relaxed.
+  EXPECT_GT(uncorrected.MaxLinkError(), 3.0);
+  EXPECT_LT(map.MaxLinkError(), 1.5 * full.MaxLinkError() + 0.02)
+      << map.MaxLinkError() << " vs " << full.MaxLinkError();
+}
+
+proto::ExperienceMap SmallGraph() {
+  proto::ExperienceMap m;
+  for (int i = 0; i < 5; ++i) m.add_experiences()->set_x_m(i);
+  auto link = [&](uint32_t a, uint32_t b, double t) {
+    auto* l = m.add_links();
+    l->set_from_id(a);
+    l->set_to_id(b);
+    l->set_d_m(1.0);
+    l->set_travel_time_s(t);
+    l->set_traversals(1);
+  };
+  link(0, 1, 1.0);
+  link(1, 2, 1.0);
+  link(0, 3, 5.0);
+  link(2, 3, 0.5);  // traversed backwards on the way 0 -> 3
+  m.set_has_current(true);
+  m.set_current_id(0);
+  return m;
+}
+
+TEST(ExperienceMap, PathToGoalFollowsShortestTravelTimeOverLinks) {
+  ExperienceMap map(ExperienceMapConfig{});
+  map.Load(SmallGraph());
+  EXPECT_EQ(map.PathToGoal(0, 3), (std::vector<uint32_t>{0, 1, 2, 3}));  // 2.5 s < 5 s
+  EXPECT_EQ(map.PathToGoal(3, 0), (std::vector<uint32_t>{3, 2, 1, 0}));
+  EXPECT_EQ(map.PathToGoal(2, 2), (std::vector<uint32_t>{2}));
+  EXPECT_TRUE(map.PathToGoal(0, 4).empty());  // 4 has no links
+  EXPECT_THROW(map.PathToGoal(0, 9), std::invalid_argument);
+}
+
+TEST(ExperienceMap, SaveLoadRoundTripContinuesIdentically) {
+  ExperienceMapConfig cfg;
+  cfg.exp_relax_budget_links = 7;
+  ExperienceMap a(cfg);
+  DriveSquare(a, 1.02, 0.01);
+  a.Integrate(0.3, 0.05, 1.0);
+  ExperienceMap b(cfg);
+  b.Load(a.Save());
+  EXPECT_EQ(b.Save().SerializeAsString(), a.Save().SerializeAsString());
+  for (int i = 0; i < 50; ++i) {
+    a.Apply(ExperienceAction{});
+    b.Apply(ExperienceAction{});
+  }
+  a.Apply(LinkTo(Kind::kSet, 0, 1));
+  b.Apply(LinkTo(Kind::kSet, 0, 1));
+  EXPECT_EQ(b.Save().SerializeAsString(), a.Save().SerializeAsString());
+}
+
+TEST(ExperienceMap, MergeOffsetsIdsAndAnchorsTheSecondMap) {
+  ExperienceMap a(NoCorrection());
+  a.Apply(Create(0, kNoExperience));
+  a.Integrate(1.0, 0.0, 3.0);
+  a.Apply(Create(1, 0));  // (0, 3) facing +y
+  ExperienceMapConfig b_cfg = NoCorrection();
+  b_cfg.exp_initial_em_deg = 0.0;  // b's frame is turned 90 degrees from a's
+  ExperienceMap b(b_cfg);
+  b.Apply(Create(0, kNoExperience));
+  b.Integrate(2.0, 0.0, 1.0);  // along b's x
+  b.Apply(Create(1, 0));
+  b.Integrate(1.0, 0.0, 1.0);
+  b.Apply(Create(2, 1));
+  const size_t a_links = a.links().size();
+  a.MergeFrom(b, {{1, 0}});  // b's experience 0 is a's experience 1
+  ASSERT_EQ(a.experiences().size(), 5u);
+  EXPECT_EQ(a.links().size(), a_links + b.links().size() + 1);
+  const Experience& b0 = a.experiences()[2];
+  EXPECT_NEAR(b0.x_m, 0.0, 1e-9);
+  EXPECT_NEAR(b0.y_m, 3.0, 1e-9);
+  EXPECT_NEAR(b0.th_rad, kPi / 2, 1e-9);
+  // b's first move was along its own facing: now along a's +y.
+  EXPECT_NEAR(a.experiences()[3].x_m, 0.0, 1e-9);
+  EXPECT_NEAR(a.experiences()[3].y_m, 5.0, 1e-9);
+  const Link& anchor = a.links().back();
+  EXPECT_EQ(anchor.from_id, 1u);
+  EXPECT_EQ(anchor.to_id, 2u);
+  EXPECT_EQ(a.links()[a_links].from_id, 2u);  // b's 0 -> 1, offset by 2
+  EXPECT_EQ(a.links()[a_links].to_id, 3u);
+  EXPECT_EQ(a.current_id(), 1u);
+  EXPECT_FALSE(a.PathToGoal(0, 4).empty());
+  ExperienceMap reloaded(NoCorrection());
+  reloaded.Load(a.Save());
+  EXPECT_EQ(reloaded.Save().SerializeAsString(), a.Save().SerializeAsString());
+  EXPECT_THROW(a.MergeFrom(b, {{9, 0}}), std::invalid_argument);
+}
+
+TEST(ExperienceMap, CorruptMapFileIsRefused) {
+  ExperienceMap map(NoCorrection());
+  DriveSquare(map, 1.0, 0.0);
+  const std::string path = ::testing::TempDir() + "/rslam_experience_map_corrupt_test.pb";
+  WriteStateFile(path, "rslam.experience_map.ExperienceMap", 1, map.Save());
+  proto::ExperienceMap ok;
+  ReadStateFile(path, "rslam.experience_map.ExperienceMap", 1, ok);
+  EXPECT_EQ(ok.experiences_size(), 20);
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(-10, std::ios::end);
+    char c;
+    f.read(&c, 1);
+    c = static_cast<char>(c ^ 0x5a);
+    f.seekp(-10, std::ios::end);
+    f.write(&c, 1);
+  }
+  proto::ExperienceMap bad;
+  EXPECT_THROW(ReadStateFile(path, "rslam.experience_map.ExperienceMap", 1, bad), StateFileError);
+  std::filesystem::remove(path);
+}
+
+TEST(ExperienceMap, LoadRefusesInconsistentMessage) {
+  ExperienceMap map(NoCorrection());
+  proto::ExperienceMap m = SmallGraph();
+  m.mutable_links(0)->set_to_id(42);
+  EXPECT_THROW(map.Load(m), std::invalid_argument);
+  m = SmallGraph();
+  m.mutable_experiences(1)->set_x_m(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_THROW(map.Load(m), std::invalid_argument);
+  EXPECT_TRUE(map.experiences().empty());
+}
+
+TEST(ExperienceMap, RejectsInconsistentIdsAndNonFiniteOdometry) {
+  ExperienceMap map(NoCorrection());
+  EXPECT_THROW(map.Apply(Create(1, kNoExperience)), std::invalid_argument);  // not the next id
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(1, 0));
+  const std::string before = map.Save().SerializeAsString();
+  EXPECT_THROW(map.Apply(Create(3, 1)), std::invalid_argument);        // gap in ids
+  EXPECT_THROW(map.Apply(Create(2, 0)), std::invalid_argument);        // from is not current
+  EXPECT_THROW(map.Apply(LinkTo(Kind::kLink, 1, 7)), std::invalid_argument);  // unknown id
+  EXPECT_THROW(map.Apply(LinkTo(Kind::kSet, 1, 9)), std::invalid_argument);
+  EXPECT_THROW(map.Apply(LinkTo(Kind::kLink, 1, 1)), std::invalid_argument);  // self link
+  ExperienceAction nan_angle = LinkTo(Kind::kSet, 1, 0);
+  nan_angle.relative_angle_rad = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(map.Apply(nan_angle), std::invalid_argument);
+  EXPECT_THROW(map.Integrate(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.1), std::invalid_argument);
+  EXPECT_THROW(map.Integrate(1.0, std::numeric_limits<double>::infinity(), 0.1), std::invalid_argument);
+  EXPECT_THROW(map.Integrate(1.0, 0.0, -0.1), std::invalid_argument);
+  EXPECT_EQ(map.Save().SerializeAsString(), before);
+}
+
+}  // namespace
+}  // namespace rslam::experience_map
