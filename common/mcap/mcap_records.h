@@ -107,8 +107,9 @@ class RecordBuilder {
     Raw(s.data(), s.size());
   }
   void Raw(const void* p, std::size_t n) {
-    const auto* b = static_cast<const std::byte*>(p);
-    out_.insert(out_.end(), b, b + n);
+    const std::size_t at = out_.size();
+    out_.resize(at + n);
+    if (n > 0) std::memcpy(out_.data() + at, p, n);
   }
   // Starts a record and returns the position of its length field, for EndRecord.
   std::size_t BeginRecord(Opcode op) {

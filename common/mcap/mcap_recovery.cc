@@ -97,7 +97,8 @@ void ParseItems(std::span<const std::byte> records, std::vector<Item>& items) {
 }  // namespace
 
 RecoveryReport RecoverMcap(const std::string& in_path, const std::string& out_path,
-                           const McapWriterOptions& options, bool keep_input_compression) {
+                           const McapWriterOptions& options, bool keep_input_compression,
+                           uint64_t max_chunk_uncompressed_bytes) {
   if (in_path == out_path) throw std::invalid_argument("RecoverMcap: output must differ from input");
   const MappedFile in(in_path);
   const auto bytes = in.bytes();
@@ -181,7 +182,8 @@ RecoveryReport RecoverMcap(const std::string& in_path, const std::string& out_pa
           const uint32_t crc = c.U32();
           const std::string compression = c.String();
           const auto records = c.Bytes(c.U64());
-          if (!compression.empty() && uncompressed_size > records.size() * (uint64_t{1} << 16)) {
+          if (uncompressed_size > max_chunk_uncompressed_bytes ||
+              (!compression.empty() && uncompressed_size > records.size() * (uint64_t{1} << 16))) {
             throw McapError("implausible chunk size");
           }
           DecompressChunk(compression, records, uncompressed_size, pos, plain);

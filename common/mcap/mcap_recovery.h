@@ -21,8 +21,10 @@ struct RecoveryReport {
 // keep_input_compression is set, the output uses the compression of the input's first chunk.
 // Schema and channel ids may be renumbered; topics, metadata, sequences and times are kept.
 // Throws McapError if in_path does not start with MCAP magic and a complete Header.
+// Chunks claiming more than max_chunk_uncompressed_bytes are treated as damage (the end).
 RecoveryReport RecoverMcap(const std::string& in_path, const std::string& out_path,
                            const McapWriterOptions& options = {},
-                           bool keep_input_compression = true);
+                           bool keep_input_compression = true,
+                           uint64_t max_chunk_uncompressed_bytes = uint64_t{1} << 30);
 
 }  // namespace rslam::mcap

@@ -53,6 +53,7 @@ void McapWriter::Open(const std::string& path, const McapWriterOptions& options)
   chunk_message_index_.assign(1, {});
 
   std::vector<std::byte> head;
+  head.reserve(256);
   RecordBuilder b(head);
   b.Raw(kMagic.data(), kMagic.size());
   const auto r = b.BeginRecord(Opcode::kHeader);
@@ -214,6 +215,7 @@ void McapWriter::Close() {
   FlushChunk();
 
   std::vector<std::byte> out;
+  out.reserve(4096 + chunk_indexes_.size() * 128);
   RecordBuilder b(out);
   const auto de = b.BeginRecord(Opcode::kDataEnd);
   b.U32(options_.data_section_crc ? data_crc_ : 0);
