@@ -76,10 +76,12 @@ TEST(CameraRendererTest, FloorBoundaryMapsBackToTheWallDistanceInABoxRoom) {
   }
   cam.forward_offset_m = 0.5;  // the camera ahead of the robot's centre sees the wall 0.5 m closer
   const BoundaryCheck offset = CheckFloorBoundary(world, cam, Pose2D{1.6, 1.5, 0.0}, 10.0);
+  EXPECT_EQ(offset.columns, cam.width);
   EXPECT_GE(offset.within_3_percent, offset.columns - 6) << "worst " << offset.worst;
   cam.forward_offset_m = 0.0;
   cam.tilt_rad = 0.0;  // level camera: the horizon row splits the image
   const BoundaryCheck level = CheckFloorBoundary(world, cam, Pose2D{1.6, 1.5, 2.0}, 10.0);
+  EXPECT_EQ(level.columns, cam.width);
   EXPECT_GE(level.within_3_percent, level.columns - 6) << "worst " << level.worst;
 }
 
