@@ -1,0 +1,146 @@
+#include "services/explorer/exploration_planner.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace rslam::explorer {
+namespace {
+
+using Kind = MotionCommand::Kind;
+
+// A w x h grid of 5 cm cells at the origin, every cell set to `value`, with a border wall.
+struct TestGrid {
+  int w, h;
+  std::vector<int8_t> cells;
+  TestGrid(int w_, int h_, int8_t value) : w(w_), h(h_), cells(w_ * h_, value) {
+    for (int x = 0; x < w; ++x) { Set(x, 0, 100); Set(x, h - 1, 100); }
+    for (int y = 0; y < h; ++y) { Set(0, y, 100); Set(w - 1, y, 100); }
+  }
+  void Set(int x, int y, int8_t v) { cells[y * w + x] = v; }
+  GridView View() const { return GridView{w, h, 0.05, 0.0, 0.0, cells}; }
+};
+
+ExplorerConfig Config() {
+  ExplorerConfig c;
+  c.robot_radius_m = 0.05;
+  c.coarse_cell_factor = 2;  // 10 cm exploration cells
+  return c;
+}
+
+TEST(ExplorationPlannerTest, UnknownWorldStartsWithAPirouette) {
+  TestGrid grid(40, 40, -1);
+  ExplorationPlanner planner(Config());
+  const Plan plan = planner.PlanFrom(grid.View(), {1.0, 1.0, 0.0});
+  EXPECT_FALSE(plan.complete);
+  ASSERT_EQ(plan.commands.size(), 1u);
+  EXPECT_EQ(plan.commands[0].kind, Kind::kPirouette);
+  EXPECT_EQ(plan.commands[0].steps, 12);
+  EXPECT_NEAR(plan.commands[0].angle_rad, M_PI / 6, 1e-12);
+}
+
+TEST(ExplorationPlannerTest, KnownClosedRoomIsComplete) {
+  TestGrid grid(40, 40, 0);
+  ExplorationPlanner planner(Config());
+  const Plan plan = planner.PlanFrom(grid.View(), {1.0, 1.0, 0.0});
+  EXPECT_TRUE(plan.complete);
+  ASSERT_EQ(plan.commands.size(), 1u);
+  EXPECT_EQ(plan.commands[0].kind, Kind::kStop);
+}
+
+TEST(ExplorationPlannerTest, UnknownSpaceBehindAClosedWallIsNotAGoal) {
+  TestGrid grid(40, 40, 0);
+  for (int y = 0; y < 40; ++y) grid.Set(25, y, 100);
+  for (int y = 1; y < 39; ++y)
+    for (int x = 26; x < 39; ++x) grid.Set(x, y, -1);
+  ExplorationPlanner planner(Config());
+  EXPECT_TRUE(planner.PlanFrom(grid.View(), {0.5, 1.0, 0.0}).complete);
+  for (int y = 14; y <= 25; ++y) grid.Set(25, y, 0);  // a 60 cm door: reachable again
+  EXPECT_FALSE(planner.PlanFrom(grid.View(), {0.5, 1.0, 0.0}).complete);
+}
+
+TEST(ExplorationPlannerTest, StraightCorridorBecomesOneTurnAndOneMove) {
+  // Known free corridor along x, unknown at its far end.
+  TestGrid grid(60, 12, 0);
+  for (int y = 1; y < 11; ++y)
+    for (int x = 50; x < 59; ++x) grid.Set(x, y, -1);
+  ExplorationPlanner planner(Config());
+  const Plan plan = planner.PlanFrom(grid.View(), {0.35, 0.35, M_PI / 2});
+  ASSERT_FALSE(plan.complete);
+  ASSERT_EQ(plan.commands.size(), 3u);
+  EXPECT_EQ(plan.commands[0].kind, Kind::kRotate);
+  EXPECT_NEAR(plan.commands[0].angle_rad, -M_PI / 2, 1e-9);
+  EXPECT_EQ(plan.commands[1].kind, Kind::kMove);
+  EXPECT_NEAR(plan.commands[1].distance_m, 2.1, 1e-9);  // to the centre of cell x = 24 (2.45 m)
+  EXPECT_EQ(plan.commands[2].kind, Kind::kPirouette);
+  EXPECT_NEAR(plan.target.x, 2.45, 1e-9);
+  EXPECT_EQ(plan.goal_x, 25);
+}
+
+TEST(ExplorationPlannerTest, LooksBeforeItMoves) {
+  TestGrid grid(40, 40, 0);
+  ExplorationPlanner planner(Config());
+  const Pose2D robot{0.5, 1.0, 0.0};
+  EXPECT_TRUE(planner.IsPathClear(grid.View(), robot, 1.0));
+  grid.Set(25, 20, 100);  // at x = 1.275, y = 1.025: on the path
+  EXPECT_FALSE(planner.IsPathClear(grid.View(), robot, 1.0));
+  EXPECT_TRUE(planner.IsPathClear(grid.View(), robot, 0.6));  // stops short of it
+  EXPECT_TRUE(planner.IsPathClear(grid.View(), robot, -0.3)); // backwards is clear
+  grid.Set(25, 20, 0);
+  grid.Set(25, 21, 100);  // 7.5 cm beside the path: outside the 5 cm radius
+  EXPECT_TRUE(planner.IsPathClear(grid.View(), robot, 1.0));
+  grid.Set(25, 20, 100);
+  EXPECT_THROW(planner.IsPathClear(grid.View(), robot, NAN), std::invalid_argument);
+}
+
+TEST(ExplorationPlannerTest, GoalStillUnknownAfterLookingIsSetAsideAndExplorationEnds) {
+  // A known room with one unknown cell that no sensor will ever resolve.
+  TestGrid grid(20, 20, 0);
+  grid.Set(10, 10, -1);
+  ExplorationPlanner planner(Config());
+  Pose2D robot{0.25, 0.25, 0.0};
+  Plan plan = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(plan.complete);
+  ASSERT_TRUE(plan.has_target);
+  robot = plan.target;  // drive there, look around, learn nothing
+  planner.RecordPirouette(robot);
+  plan = planner.PlanFrom(grid.View(), robot);
+  EXPECT_TRUE(plan.complete);
+  ASSERT_EQ(planner.set_aside_goals().size(), 1u);
+  EXPECT_EQ(planner.set_aside_goals()[0].x, 5);
+  EXPECT_EQ(planner.set_aside_goals()[0].y, 5);
+  EXPECT_NE(planner.set_aside_goals()[0].reason.find("pirouette"), std::string::npos);
+}
+
+TEST(ExplorationPlannerTest, GoalBlockedRepeatedlyIsSetAside) {
+  TestGrid grid(20, 20, 0);
+  grid.Set(15, 15, -1);
+  ExplorerConfig config = Config();
+  config.max_blocked_attempts = 2;
+  ExplorationPlanner planner(config);
+  const Pose2D robot{0.25, 0.25, 0.0};
+  Plan plan = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(plan.complete);
+  planner.ReportBlocked(plan);
+  EXPECT_FALSE(planner.PlanFrom(grid.View(), robot).complete);
+  planner.ReportBlocked(plan);
+  EXPECT_TRUE(planner.PlanFrom(grid.View(), robot).complete);
+  ASSERT_EQ(planner.set_aside_goals().size(), 1u);
+  EXPECT_NE(planner.set_aside_goals()[0].reason.find("blocked"), std::string::npos);
+}
+
+TEST(ExplorationPlannerTest, RejectsBadInput) {
+  TestGrid grid(20, 20, 0);
+  ExplorationPlanner planner(Config());
+  EXPECT_THROW(planner.PlanFrom(grid.View(), {NAN, 0, 0}), std::invalid_argument);
+  EXPECT_THROW(planner.PlanFrom(grid.View(), {-5.0, 0.5, 0}), std::invalid_argument);
+  GridView bad = grid.View();
+  bad.width = 19;
+  EXPECT_THROW(planner.PlanFrom(bad, {0.5, 0.5, 0}), std::invalid_argument);
+  ExplorerConfig config;
+  config.coarse_cell_factor = 0;
+  EXPECT_THROW(ExplorationPlanner{config}, ConfigError);
+}
+
+}  // namespace
+}  // namespace rslam::explorer

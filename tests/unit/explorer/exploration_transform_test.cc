@@ -1,0 +1,79 @@
+#include "services/explorer/exploration_transform.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace rslam::explorer {
+namespace {
+
+// The oracle: relax every edge until nothing changes (Bellman-Ford), same moves and costs.
+std::vector<int32_t> BruteForce(int w, int h, const std::vector<uint8_t>& trav, const std::vector<uint8_t>& goal) {
+  std::vector<int64_t> d(w * h, INT64_MAX);
+  for (int i = 0; i < w * h; ++i)
+    if (goal[i]) d[i] = 0;
+  auto open = [&](int x, int y) { return trav[y * w + x] || goal[y * w + x]; };
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        if (!trav[y * w + x]) continue;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+            if (d[ny * w + nx] == INT64_MAX) continue;
+            const bool diag = dx && dy;
+            // Moving from (nx, ny) into (x, y) passes between (x, ny) and (nx, y).
+            if (diag && !(open(x, ny) && open(nx, y))) continue;
+            const int64_t c = d[ny * w + nx] + (diag ? 14 : 10);
+            if (c < d[y * w + x]) { d[y * w + x] = c; changed = true; }
+          }
+      }
+  }
+  std::vector<int32_t> out(w * h);
+  for (int i = 0; i < w * h; ++i) out[i] = d[i] == INT64_MAX ? kUnreachable : static_cast<int32_t>(d[i]);
+  return out;
+}
+
+TEST(ExplorationTransformTest, EqualsBruteForceShortestPathsOnRandomGrids) {
+  std::mt19937 rng(42);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int w = 5 + trial * 2, h = 4 + trial;
+    std::vector<uint8_t> trav(w * h), goal(w * h);
+    std::bernoulli_distribution blocked(0.3), is_goal(0.03);
+    for (int i = 0; i < w * h; ++i) {
+      goal[i] = is_goal(rng);
+      trav[i] = !goal[i] && !blocked(rng);
+    }
+    EXPECT_EQ(ComputeExplorationTransform(w, h, trav, goal), BruteForce(w, h, trav, goal)) << "trial " << trial;
+  }
+}
+
+TEST(ExplorationTransformTest, RoutesAroundAWallInsteadOfThroughIt) {
+  // 9 x 5, goal at (8, 2), a wall at x = 4 except the gap at y = 4.
+  const int w = 9, h = 5;
+  std::vector<uint8_t> trav(w * h, 1), goal(w * h, 0);
+  goal[2 * w + 8] = 1;
+  trav[2 * w + 8] = 0;
+  for (int y = 0; y < 4; ++y) trav[y * w + 4] = 0;
+  const auto cost = ComputeExplorationTransform(w, h, trav, goal);
+  // From (0, 2): straight through would be 80; around through (4, 4) it is longer.
+  EXPECT_GT(cost[2 * w + 0], 80);
+  EXPECT_EQ(cost[2 * w + 0], BruteForce(w, h, trav, goal)[2 * w + 0]);
+  EXPECT_EQ(cost[0 * w + 4], kUnreachable);  // a wall cell
+}
+
+TEST(ExplorationTransformTest, NoGoalsMeansNothingIsReachable) {
+  std::vector<uint8_t> trav(12, 1), goal(12, 0);
+  for (int32_t c : ComputeExplorationTransform(4, 3, trav, goal)) EXPECT_EQ(c, kUnreachable);
+}
+
+TEST(ExplorationTransformTest, RejectsMismatchedMasks) {
+  std::vector<uint8_t> trav(12, 1), goal(11, 0);
+  EXPECT_THROW(ComputeExplorationTransform(4, 3, trav, goal), std::invalid_argument);
+  EXPECT_THROW(ComputeExplorationTransform(0, 3, {}, {}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rslam::explorer
