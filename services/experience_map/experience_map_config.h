@@ -11,10 +11,10 @@ struct ExperienceMapConfig {
   double exp_initial_em_deg = 90.0; // facing of the first experience
   // Link relaxations per frame. 0 = OpenRatSLAM behaviour: exp_loops full sweeps after every
   // action (cost grows with the map).
-  int exp_relax_budget_links = 2000;
+  int exp_relax_budget_links = 1000;
   // Links around the latest loop closure re-relaxed every frame (part of the budget) until a
   // local sweep moves nothing by more than exp_relax_tolerance.
-  int exp_local_region_links = 1000;
+  int exp_local_region_links = 500;
   double exp_relax_tolerance = 1e-6;  // m and rad
   // Average the observed transform into an existing link when the robot re-traverses it
   // (000 eq. 2). OpenRatSLAM keeps the first observation only (false).
