@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -68,11 +69,17 @@ DifferenceMatrix SequenceMatchDifferences(const DifferenceMatrix& differences,
   const Eigen::Index length = options.length;
   DifferenceMatrix scores(rows, cols);
   for (Eigen::Index i = 0; i < rows; ++i) {
-    for (Eigen::Index j = 0; j < cols; ++j) {
-      const Eigen::Index k = std::min({length, i + 1, j + 1});
-      const double before = (i - k >= 0 && j - k >= 0) ? diagonal_sum(i - k, j - k) : 0.0;
-      scores(i, j) = (diagonal_sum(i, j) - before) / static_cast<double>(k);
+    const Eigen::Index k = std::min(length, i + 1);
+    const Eigen::Index first_candidate = std::min(k - 1, cols - 1);
+    double worst = -std::numeric_limits<double>::infinity();
+    for (Eigen::Index j = first_candidate; j < cols; ++j) {
+      // Fewer references than frames in the sequence: use the diagonal that exists.
+      const Eigen::Index terms = std::min(k, j + 1);
+      const double before = (i - terms >= 0 && j - terms >= 0) ? diagonal_sum(i - terms, j - terms) : 0.0;
+      scores(i, j) = (diagonal_sum(i, j) - before) / static_cast<double>(terms);
+      worst = std::max(worst, scores(i, j));
     }
+    for (Eigen::Index j = 0; j < first_candidate; ++j) scores(i, j) = worst;
   }
   return scores;
 }

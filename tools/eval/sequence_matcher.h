@@ -3,12 +3,13 @@
 // a run of frames rather than by one frame. The score of (query i, reference j) is the mean of
 // the differences along the diagonal ending there,
 //
-//   S(i, j) = 1/K * sum_{k=0}^{K-1} D(i - k, j - k),   K = min(L, i + 1, j + 1),
+//   S(i, j) = 1/K * sum_{k=0}^{K-1} D(i - k, j - k),   K = min(L, i + 1),
 //
 // i.e. a constant velocity of one reference frame per query frame (the sets evaluated here are
-// frame-aligned), looking back only at queries already seen, so it works online. Early queries
-// and early references use the part of the diagonal that exists (K < L); the mean keeps such
-// short diagonals comparable with full ones.
+// frame-aligned), looking back only at queries already seen, so it works online. An early query
+// (i < L - 1) uses the K = i + 1 frames that exist. A reference too early to end a diagonal of
+// K frames (j < K - 1) is no candidate: it gets the row's largest valid score, because the mean
+// of a shorter diagonal is noisier and its lucky lows would beat every full-length diagonal.
 //
 // Optional local contrast enhancement (SeqSLAM's D-hat): each entry is first normalised by the
 // mean and standard deviation of its row over a window of references centred on it, which
