@@ -1,6 +1,7 @@
 #pragma once
 // Publisher<T>: publishes one message type on one topic, in this robot's partition.
 
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <mutex>
@@ -27,7 +28,10 @@ class Publisher {
     buffer_.clear();
     AppendCdr(msg, buffer_);
     writer_->Write(buffer_);
+    ++published_;
   }
+
+  uint64_t published() const { return published_; }
 
   int MatchedSubscribers() const { return writer_->MatchedReaders(); }
 
@@ -47,6 +51,7 @@ class Publisher {
   std::unique_ptr<RawWriter> writer_;
   std::mutex mutex_;
   std::vector<uint8_t> buffer_;
+  std::atomic<uint64_t> published_{0};
 };
 
 }  // namespace rslam::bus
