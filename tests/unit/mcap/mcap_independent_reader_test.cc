@@ -39,13 +39,18 @@ std::string RunCommand(const std::string& command, int& status) {
 std::string NodeModulesDir() {
   const std::string prefix = std::string(RSLAM_BINARY_DIR) + "/npm-mcap";
   const std::string modules = prefix + "/node_modules";
-  if (!std::filesystem::exists(modules + "/@mcap/core") ||
-      !std::filesystem::exists(modules + "/@mcap/nodejs") ||
-      !std::filesystem::exists(modules + "/@mcap/support")) {
+  const std::vector<std::string> packages = {"@mcap/core", "@mcap/nodejs", "@mcap/support",
+                                             "@foxglove/omgidl-parser",
+                                             "@foxglove/omgidl-serialization"};
+  std::string missing;
+  for (const auto& p : packages) {
+    if (!std::filesystem::exists(modules + "/" + p)) missing += " " + p;
+  }
+  if (!missing.empty()) {
     int status = 0;
-    const std::string log = RunCommand("npm install --no-audit --no-fund --silent --prefix '" + prefix +
-                                    "' @mcap/core @mcap/nodejs @mcap/support 2>&1",
-                                status);
+    const std::string log = RunCommand(
+        "npm install --no-audit --no-fund --silent --prefix '" + prefix + "'" + missing + " 2>&1",
+        status);
     if (status != 0) ADD_FAILURE() << "npm install failed:\n" << log;
   }
   return modules;
@@ -126,6 +131,73 @@ TEST_P(IndependentReader, OfficialMcapReadersAgreeWithWhatWasWritten) {
   }
   EXPECT_EQ(j["stream_message_count"], msgs.size());
   EXPECT_EQ(j["stream_crc_sum"].get<uint32_t>(), crc_sum);
+}
+
+// Ping as hand-encoded XCDR1 little-endian: header 00 01 00 00, then (aligned relative to the
+// end of the header) uint32 seq, string (u32 length with NUL, bytes, NUL), sequence<uint8>.
+std::vector<std::byte> EncodePing(uint32_t seq, const std::string& text,
+                                  const std::vector<uint8_t>& data) {
+  std::vector<uint8_t> b = {0x00, 0x01, 0x00, 0x00};
+  auto align4 = [&] {
+    while ((b.size() - 4) % 4 != 0) b.push_back(0);
+  };
+  auto u32 = [&](uint32_t v) {
+    align4();
+    for (int i = 0; i < 4; ++i) b.push_back(static_cast<uint8_t>(v >> (8 * i)));
+  };
+  u32(seq);
+  u32(static_cast<uint32_t>(text.size() + 1));
+  b.insert(b.end(), text.begin(), text.end());
+  b.push_back(0);
+  u32(static_cast<uint32_t>(data.size()));
+  b.insert(b.end(), data.begin(), data.end());
+  std::vector<std::byte> out(b.size());
+  std::memcpy(out.data(), b.data(), b.size());
+  return out;
+}
+
+TEST(IndependentReader, DecodesHandEncodedCdrWithTheIdlSchema) {
+  if (!HaveCommand("node") || !HaveCommand("npm")) GTEST_SKIP() << "node/npm not installed";
+  const std::string modules = NodeModulesDir();
+  const auto path = ScratchDir() / "ping.mcap";
+  struct Ping {
+    uint32_t seq;
+    std::string text;
+    std::vector<uint8_t> data;
+  };
+  std::vector<Ping> pings;
+  for (uint32_t i = 0; i < 50; ++i) {
+    std::vector<uint8_t> d(i * 5 % 23);
+    for (std::size_t k = 0; k < d.size(); ++k) d[k] = static_cast<uint8_t>(i + 3 * k);
+    pings.push_back({1000 + i, std::string(i % 7, static_cast<char>('a' + i % 26)), d});
+  }
+  {
+    McapWriter w;
+    w.Open(path);
+    const uint16_t s = w.AddSchema("rslam::msg::Ping", "omgidl", testing::kPingIdl);
+    const uint16_t ch = w.AddChannel(s, "/robot1/ping", "cdr", {{"robot", "robot1"}});
+    for (uint32_t i = 0; i < pings.size(); ++i) {
+      w.Write(ch, i, 1000 + i, 1000 + i, EncodePing(pings[i].seq, pings[i].text, pings[i].data));
+    }
+    w.Close();
+  }
+  int status = 0;
+  const std::string script = std::string(RSLAM_SOURCE_DIR) + "/tests/unit/mcap/read_mcap.mjs";
+  const std::string out = RunCommand("NODE_PATH='" + modules + "' node '" + script + "' '" +
+                                         path.string() + "' --decode-cdr 2>&1",
+                                     status);
+  ASSERT_EQ(status, 0) << out;
+  const auto j = nlohmann::json::parse(out);
+  ASSERT_EQ(j["messages"].size(), pings.size());
+  for (std::size_t i = 0; i < pings.size(); ++i) {
+    SCOPED_TRACE("ping " + std::to_string(i));
+    const auto& d = j["messages"][i]["decoded"];
+    EXPECT_EQ(d["seq"], pings[i].seq);
+    EXPECT_EQ(d["text"], pings[i].text);
+    EXPECT_EQ(d["data"]["length"], pings[i].data.size());
+    EXPECT_EQ(d["data"]["crc32"].get<uint32_t>(),
+              Crc32(pings[i].data.data(), pings[i].data.size()));
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Compressions, IndependentReader, ::testing::Values("zstd", "lz4", ""),

@@ -3,7 +3,10 @@
 // rslam's McapWriter wrote. Two independent passes: the indexed reader (footer -> summary ->
 // chunk indexes -> message indexes) and the streaming reader (every record in order, CRCs on).
 //
-// Usage: NODE_PATH=<dir>/node_modules node read_mcap.mjs <file.mcap>
+// With --decode-cdr, messages whose schema is OMG IDL are also decoded from CDR with
+// @foxglove/omgidl-parser + @foxglove/omgidl-serialization (byte arrays reported as length+CRC).
+//
+// Usage: NODE_PATH=<dir>/node_modules node read_mcap.mjs <file.mcap> [--decode-cdr]
 import { createRequire } from "node:module";
 import { open, readFile } from "node:fs/promises";
 import zlib from "node:zlib";
@@ -15,6 +18,25 @@ const { FileHandleReadable } = require("@mcap/nodejs");
 const { loadDecompressHandlers } = require("@mcap/support");
 
 const file = process.argv[2];
+const decodeCdr = process.argv.includes("--decode-cdr");
+const cdrReaders = new Map();  // schema id -> MessageReader
+function cdrReaderFor(schema) {
+  if (!cdrReaders.has(schema.id)) {
+    const { parseIDL } = require("@foxglove/omgidl-parser");
+    const { MessageReader } = require("@foxglove/omgidl-serialization");
+    cdrReaders.set(schema.id, new MessageReader(schema.name, parseIDL(new TextDecoder().decode(schema.data))));
+  }
+  return cdrReaders.get(schema.id);
+}
+// JSON-friendly decoded value: byte arrays become {length, crc32}, bigints strings.
+function plain(v) {
+  if (v instanceof Uint8Array) return { length: v.byteLength, crc32: zlib.crc32(v) };
+  if (typeof v === "bigint") return v.toString();
+  if (ArrayBuffer.isView(v)) return Array.from(v, plain);
+  if (Array.isArray(v)) return v.map(plain);
+  if (v && typeof v === "object") return Object.fromEntries(Object.entries(v).map(([k, x]) => [k, plain(x)]));
+  return v;
+}
 const decompressHandlers = await loadDecompressHandlers();
 
 const handle = await open(file, "r");
@@ -53,11 +75,16 @@ if (reader.statistics) {
   };
 }
 for await (const m of reader.readMessages({ validateCrcs: true })) {
-  out.messages.push({
+  const entry = {
     channel: m.channelId, sequence: m.sequence,
     log_time: m.logTime.toString(), publish_time: m.publishTime.toString(),
     size: m.data.byteLength, crc32: zlib.crc32(m.data),
-  });
+  };
+  const schema = reader.schemasById.get(reader.channelsById.get(m.channelId).schemaId);
+  if (decodeCdr && schema && schema.encoding === "omgidl") {
+    entry.decoded = plain(cdrReaderFor(schema).readMessage(m.data));
+  }
+  out.messages.push(entry);
 }
 await handle.close();
 
