@@ -104,8 +104,8 @@ const uint8_t* TemplateLibrary::PrepareShiftedView(const EncodedView& view, std:
   return buffer.data();
 }
 
-double TemplateLibrary::TemplateDifference(const uint8_t* view_rows, uint32_t id, double bound,
-                                           int& best_shift) const {
+double TemplateLibrary::TemplateDifference(const uint8_t* view_rows, uint32_t id, double bound, int& best_shift,
+                                           double* lower_bound) const {
   const uint8_t* tmpl = pixels_.data() + static_cast<std::size_t>(id) * template_size_;
   const int view_stride = config_.panoramic ? 2 * width_ : width_;
   double best = kInfinity;
@@ -139,8 +139,13 @@ double TemplateLibrary::TemplateDifference(const uint8_t* view_rows, uint32_t id
         break;
       }
     }
-    if (abandoned) continue;
     const double difference = static_cast<double>(sad) / (255.0 * pixels);
+    if (abandoned) {
+      // The full difference is at least the partial one.
+      if (lower_bound) *lower_bound = std::min(*lower_bound, difference);
+      continue;
+    }
+    if (lower_bound) *lower_bound = std::min(*lower_bound, difference);
     if (difference < best) {
       best = difference;
       best_shift = s;
@@ -151,8 +156,10 @@ double TemplateLibrary::TemplateDifference(const uint8_t* view_rows, uint32_t id
 
 TemplateLibrary::Best TemplateLibrary::BestGridMatch(const EncodedView& view, bool prefilter) const {
   Best best;
-  best.difference = kInfinity;
-  double smallest_mean_gap = kInfinity;
+  // Only a difference within the threshold can be a match, so every template is abandoned as
+  // soon as its partial sum passes the threshold (or the best so far, once one is found).
+  best.difference = config_.match_threshold;
+  double smallest_lower_bound = kInfinity;
   std::vector<uint8_t>& rows = const_cast<std::vector<uint8_t>&>(scratch_rows_);
   const uint8_t* view_rows = PrepareShiftedView(view, rows);
   const double gap_limit = config_.match_threshold + kMeanPrefilterSlack;
@@ -161,15 +168,19 @@ TemplateLibrary::Best TemplateLibrary::BestGridMatch(const EncodedView& view, bo
     if (prefilter) {
       const double gap = std::abs(static_cast<double>(view.mean) - means_[id]);
       if (gap > gap_limit) {
-        smallest_mean_gap = std::min(smallest_mean_gap, gap);
+        smallest_lower_bound = std::min(smallest_lower_bound, gap);
         continue;
       }
     }
     int shift = 0;
-    const double difference = TemplateDifference(view_rows, id, best.difference, shift);
-    if (difference < best.difference) best = {id, shift, difference, true};
+    double lower_bound = kInfinity;
+    const double difference = TemplateDifference(view_rows, id, best.difference, shift, &lower_bound);
+    if (difference <= best.difference && (!best.found || difference < best.difference)) {
+      best = {id, shift, difference, true};
+    }
+    smallest_lower_bound = std::min(smallest_lower_bound, lower_bound);
   }
-  if (!best.found) best.difference = smallest_mean_gap;
+  if (!best.found) best.difference = smallest_lower_bound;
   return best;
 }
 

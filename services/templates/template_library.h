@@ -28,10 +28,11 @@
 // rotation index r (0..35) of paper 001, recoverable as round(angle / 10 deg) mod 36.
 //
 // Speed: templates live in one contiguous 8-bit buffer; matching uses SSE2 sums of absolute
-// differences, stops a template as soon as its partial sum exceeds the best so far, and (patch
-// and column, MatchOrLearn only) skips templates whose precomputed mean differs from the view's
-// by more than match_threshold + 0.005 (OpenRatSLAM's prefilter). A difference reported for a
-// view above threshold is therefore exact only among templates not skipped.
+// differences and abandons a template as soon as its partial sum exceeds min(match_threshold,
+// best so far); MatchOrLearn (patch, column) also skips templates whose precomputed mean differs
+// from the view's by more than match_threshold + 0.005 (OpenRatSLAM's prefilter). So a matched
+// view's difference is exact, but a new view's `difference` is only a lower bound (> threshold
+// in practice) of its best difference. Differences() is always exact and exhaustive.
 //
 // Deterministic; not thread-safe for concurrent mutation; bad images throw std::invalid_argument.
 
@@ -88,8 +89,11 @@ class TemplateLibrary {
   uint32_t Store(const EncodedView& view);
   // Prepares scratch_view_ (rows doubled when panoramic) from view.
   const uint8_t* PrepareShiftedView(const EncodedView& view, std::vector<uint8_t>& buffer) const;
-  // Minimum over shifts of template `id`; abandons (returns > bound) once it exceeds `bound`.
-  double TemplateDifference(const uint8_t* view_rows, uint32_t id, double bound, int& best_shift) const;
+  // Minimum over shifts of template `id`, or +infinity when every shift passed `bound` (a shift
+  // is abandoned as soon as its partial sum does). lower_bound (optional) gets the smallest
+  // difference or partial difference seen: the template's difference is at least that.
+  double TemplateDifference(const uint8_t* view_rows, uint32_t id, double bound, int& best_shift,
+                            double* lower_bound = nullptr) const;
   Best BestGridMatch(const EncodedView& view, bool prefilter) const;
   Best BestHistogramMatch(const EncodedView& view, double& best_divergence) const;
   double RotationDifference(const EncodedView& view, uint32_t id, int& best_rotation) const;

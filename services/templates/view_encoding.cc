@@ -1,6 +1,5 @@
 #include "services/templates/view_encoding.h"
 
-#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -27,6 +26,61 @@ std::string Describe(const TemplateConfig& c) {
 }
 
 uint8_t Quantise(float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); }
+
+// For an axis of `source` pixels shrunk to `target` cells: each source pixel's first cell, and
+// how much of the pixel falls in it (the rest falls in the next cell).
+struct AxisWeights {
+  std::vector<int> cell;
+  std::vector<float> first_weight;
+};
+
+AxisWeights ComputeAxisWeights(int source, int target) {
+  AxisWeights w;
+  w.cell.resize(source);
+  w.first_weight.resize(source);
+  const double scale = static_cast<double>(source) / target;
+  for (int j = 0; j < source; ++j) {
+    const int cell = std::min(static_cast<int>(j / scale), target - 1);
+    const double boundary = (cell + 1) * scale;
+    w.cell[j] = cell;
+    w.first_weight[j] = cell + 1 < target && j + 1 > boundary ? static_cast<float>(boundary - j) : 1.0f;
+  }
+  return w;
+}
+
+// Area-weighted mean of each output cell (what cv::INTER_AREA computes), with intensities
+// scaled to [0, 1]. OpenCV's INTER_AREA takes a slow generic path for non-integer ratios
+// (560 -> 60 columns); this separable version costs a few microseconds.
+cv::Mat AreaShrink(const cv::Mat& source, int width, int height) {
+  const AxisWeights wx = ComputeAxisWeights(source.cols, width);
+  const AxisWeights wy = ComputeAxisWeights(source.rows, height);
+  std::vector<float> bands(static_cast<std::size_t>(height) * source.cols, 0.0f);
+  for (int y = 0; y < source.rows; ++y) {
+    const uint8_t* row = source.ptr<uint8_t>(y);
+    const float w_first = wy.first_weight[y];
+    float* first = bands.data() + static_cast<std::size_t>(wy.cell[y]) * source.cols;
+    for (int x = 0; x < source.cols; ++x) first[x] += w_first * static_cast<float>(row[x]);
+    if (w_first < 1.0f) {
+      const float w_second = 1.0f - w_first;
+      float* second = first + source.cols;
+      for (int x = 0; x < source.cols; ++x) second[x] += w_second * static_cast<float>(row[x]);
+    }
+  }
+  cv::Mat out(height, width, CV_32F, cv::Scalar(0));
+  const float norm = static_cast<float>(static_cast<double>(width) * height /
+                                        (static_cast<double>(source.cols) * source.rows * 255.0));
+  for (int b = 0; b < height; ++b) {
+    const float* band = bands.data() + static_cast<std::size_t>(b) * source.cols;
+    float* o = out.ptr<float>(b);
+    for (int x = 0; x < source.cols; ++x) {
+      const float w_first = wx.first_weight[x];
+      o[wx.cell[x]] += w_first * band[x];
+      if (w_first < 1.0f) o[wx.cell[x] + 1] += (1.0f - w_first) * band[x];
+    }
+    for (int x = 0; x < width; ++x) o[x] *= norm;
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -59,6 +113,11 @@ cv::Rect ViewEncoder::ResolveCrop(const cv::Mat& grey) const {
 
 void ViewEncoder::Encode(const cv::Mat& grey, EncodedView& out) const {
   const cv::Mat crop = grey(ResolveCrop(grey));
+  if (crop.cols < width_ || crop.rows < height_) {
+    throw std::invalid_argument("TemplateLibrary: the " + std::to_string(crop.cols) + "x" + std::to_string(crop.rows) +
+                                " crop is smaller than the " + std::to_string(width_) + "x" + std::to_string(height_) +
+                                " template");
+  }
   if (histogram_mode_) {
     EncodeHistogram(crop, out);
   } else {
@@ -70,10 +129,7 @@ void ViewEncoder::Encode(const cv::Mat& grey, EncodedView& out) const {
 }
 
 void ViewEncoder::EncodeGrid(const cv::Mat& crop, EncodedView& out) const {
-  cv::Mat small;
-  cv::resize(crop, small, cv::Size(width_, height_), 0, 0, cv::INTER_AREA);
-  cv::Mat view;
-  small.convertTo(view, CV_32F, 1.0 / 255.0);
+  cv::Mat view = AreaShrink(crop, width_, height_);
   // OpenRatSLAM's vt_normalisation: a global gain so the mean is `normalisation`.
   if (config_.normalisation > 0) {
     const double mean = cv::mean(view)[0];
@@ -159,11 +215,11 @@ void ViewEncoder::EncodeHistogram(const cv::Mat& crop, EncodedView& out) const {
     out.histogram[b] = total ? static_cast<float>(counts[b]) / static_cast<float>(total) : 0.0f;
   }
 
-  cv::Mat small;
-  cv::resize(panorama, small, cv::Size(width_, height_), 0, 0, cv::INTER_AREA);
+  const cv::Mat small = AreaShrink(panorama, width_, height_);
   out.pixels.resize(static_cast<std::size_t>(width_) * height_);
   for (int y = 0; y < height_; ++y) {
-    std::copy_n(small.ptr<uint8_t>(y), width_, out.pixels.data() + static_cast<std::size_t>(y) * width_);
+    const float* row = small.ptr<float>(y);
+    for (int x = 0; x < width_; ++x) out.pixels[static_cast<std::size_t>(y) * width_ + x] = Quantise(row[x]);
   }
 }
 
