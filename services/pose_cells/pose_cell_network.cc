@@ -500,16 +500,19 @@ void PoseCellNetwork::InjectView(uint32_t template_id, double relative_angle_rad
   const double active_decay = config_.vt_active_decay;
   if (template_id == views_.size()) {
     // 001 eq. 3: associate with the cell that would be active with no orientation offset.
-    views_.push_back({best_.x, best_.y, WrapReal(best_.th - gamma_cells, dim_th_), active_decay, {}});
+    views_.push_back(
+        {best_.x, best_.y, WrapReal(best_.th - gamma_cells, dim_th_), active_decay, view_updates_, {}});
   } else {
     ViewAssociation& view = views_[template_id];
     // Injection only from templates older than vt_inject_min_age (OpenRatSLAM: 10), so a view
     // just learnt here does not pull the packet back to where it already is.
     if (static_cast<uint64_t>(template_id) + config_.vt_inject_min_age < views_.size()) {
-      if (has_current_template_ && template_id == current_template_) view.decay += active_decay;
+      double decay = EffectiveDecay(view);
+      if (has_current_template_ && template_id == current_template_) decay += active_decay;
+      view.decay = decay;
+      view.decay_stamp = view_updates_;
       // OpenRatSLAM's decay curve: energy falls to zero after about three repeats.
-      const double energy =
-          config_.pc_vt_inject_energy * (30.0 - std::exp(1.2 * view.decay)) / 30.0;
+      const double energy = config_.pc_vt_inject_energy * (30.0 - std::exp(1.2 * decay)) / 30.0;
       if (energy > 0.0) {
         view_delta_th_cells_ = gamma_cells;
         const double th = WrapReal(view.pc_th + gamma_cells, dim_th_);  // 001 eq. 4
@@ -518,12 +521,16 @@ void PoseCellNetwork::InjectView(uint32_t template_id, double relative_angle_rad
       }
     }
   }
-  // Restore every template's decay towards vt_active_decay (OpenRatSLAM does this per view).
-  for (ViewAssociation& v : views_) v.decay = std::max(active_decay, v.decay - config_.pc_vt_restore);
+  ++view_updates_;  // every template's decay is restored by pc_vt_restore (lazily)
   previous_template_ = current_template_;
   has_previous_template_ = has_current_template_;
   current_template_ = template_id;
   has_current_template_ = true;
+}
+
+double PoseCellNetwork::EffectiveDecay(const ViewAssociation& v) const {
+  const double restored = config_.pc_vt_restore * static_cast<double>(view_updates_ - v.decay_stamp);
+  return std::max(config_.vt_active_decay, v.decay - restored);
 }
 
 double PoseCellNetwork::DeltaPc(const PoseCellPosition& p) const {
@@ -670,6 +677,7 @@ proto::State PoseCellNetwork::SaveState() const {
     pv->set_pc_y(v.pc_y);
     pv->set_pc_th(v.pc_th);
     pv->set_decay(v.decay);
+    pv->set_decay_stamp(v.decay_stamp);
     for (uint32_t id : v.experience_ids) pv->add_experience_ids(id);
   }
   for (const ExperienceCell& e : experiences_) {
@@ -697,6 +705,7 @@ proto::State PoseCellNetwork::SaveState() const {
   s.set_view_delta_th_cells(view_delta_th_cells_);
   s.set_next_sequence(next_sequence_);
   s.set_frames_processed(frames_processed_);
+  s.set_view_updates(view_updates_);
   return s;
 }
 
@@ -725,7 +734,8 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   const uint32_t n_exps = s.experiences_size();
   std::vector<int> seen_exp(n_exps, 0);
   for (const auto& v : s.views()) {
-    if (!finite_pos(v.pc_x(), v.pc_y(), v.pc_th()) || !std::isfinite(v.decay())) {
+    if (!finite_pos(v.pc_x(), v.pc_y(), v.pc_th()) || !std::isfinite(v.decay()) ||
+        v.decay_stamp() > s.view_updates()) {
       fail("view association out of range");
     }
     for (uint32_t id : v.experience_ids()) {
@@ -763,7 +773,7 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   best_ = {s.best_x(), s.best_y(), s.best_th()};
   views_.clear();
   for (const auto& v : s.views()) {
-    views_.push_back({v.pc_x(), v.pc_y(), v.pc_th(), v.decay(),
+    views_.push_back({v.pc_x(), v.pc_y(), v.pc_th(), v.decay(), v.decay_stamp(),
                       std::vector<uint32_t>(v.experience_ids().begin(), v.experience_ids().end())});
   }
   experiences_.clear();
@@ -782,6 +792,7 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   view_delta_th_cells_ = s.view_delta_th_cells();
   next_sequence_ = s.next_sequence();
   frames_processed_ = s.frames_processed();
+  view_updates_ = s.view_updates();
 }
 
 }  // namespace rslam::pose_cells

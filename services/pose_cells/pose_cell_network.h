@@ -96,9 +96,13 @@ class PoseCellNetwork {
  private:
   struct ViewAssociation {
     double pc_x, pc_y, pc_th;
-    double decay;
+    double decay;         // as of view update number decay_stamp
+    uint64_t decay_stamp;
     std::vector<uint32_t> experience_ids;
   };
+  // OpenRatSLAM subtracts pc_vt_restore from every template's decay on every view update
+  // (clamped at vt_active_decay); done lazily here.
+  double EffectiveDecay(const ViewAssociation& v) const;
   struct ExperienceCell {
     double pc_x, pc_y, pc_th;
     uint32_t template_id;
@@ -181,6 +185,7 @@ class PoseCellNetwork {
   double view_delta_th_cells_ = 0.0;  // orientation offset of the last view, in theta cells
   uint64_t next_sequence_ = 0;
   uint64_t frames_processed_ = 0;
+  uint64_t view_updates_ = 0;
   std::vector<double> avg_x_, avg_y_, avg_th_;  // population-vector sums, preallocated
 };
 

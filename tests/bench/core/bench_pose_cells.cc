@@ -1,6 +1,7 @@
 // Pose-cell cost per camera frame (ProcessFrame: view injection, excite/inhibit/normalise, path
-// integration, best pose, action), with St Lucia-like odometry (up to ~8 m/s at 10 Hz on 2 m
-// cells, gentle turns) and a familiar view every fifth frame.
+// integration, best pose, action). BM_PoseCellFrame*: St Lucia-like odometry (6-8 m/s at 10 Hz,
+// gentle turns) with a random old view every fifth frame (far injections: a pessimistic case,
+// the active region keeps several packets). BM_PoseCellFrameRevisit*: a route driven again.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -39,10 +40,40 @@ void RunPoseCellFrames(benchmark::State& state, int dim_xy, double cell_size_m) 
   state.counters["experiences"] = net.experience_count();
 }
 
+// Revisiting a route: a 300-frame lap (8 m/s, 10 Hz, constant turn) learnt on the first lap;
+// later laps see the template of the same place every frame (injections next to the packet),
+// plus an unrelated old view every 50th frame (a far injection, like a false loop closure).
+void RunPoseCellRevisits(benchmark::State& state, int dim_xy, double cell_size_m) {
+  rslam::pose_cells::PoseCellConfig cfg;
+  cfg.pc_dim_xy = dim_xy;
+  cfg.pc_cell_x_size = cell_size_m;
+  rslam::pose_cells::PoseCellNetwork net(cfg);
+  constexpr int kLap = 300;
+  const double vrot = 2.0 * 3.14159265358979 / (kLap * 0.1);
+  int frame = 0;
+  auto one_frame = [&] {
+    const int j = frame % kLap;
+    uint32_t tid = static_cast<uint32_t>(j);
+    bool is_new = frame < kLap;
+    if (!is_new && frame % 50 == 49) tid = static_cast<uint32_t>((j + kLap / 2) % kLap);
+    ++frame;
+    return net.ProcessFrame(8.0, vrot, 0.1, tid, is_new, 0.0);
+  };
+  for (int i = 0; i < 2 * kLap; ++i) one_frame();
+  for (auto _ : state) benchmark::DoNotOptimize(one_frame());
+  state.counters["active_cells"] = net.ActiveCellCount();
+  state.counters["region_cells"] = net.ActiveRegionCells();
+  state.counters["experiences"] = net.experience_count();
+}
+
 void BM_PoseCellFrameStLucia30x30x36(benchmark::State& state) { RunPoseCellFrames(state, 30, 2.0); }
 void BM_PoseCellFrameDefault21x21x36(benchmark::State& state) { RunPoseCellFrames(state, 21, 1.0); }
+void BM_PoseCellFrameRevisitStLucia30x30x36(benchmark::State& state) { RunPoseCellRevisits(state, 30, 2.0); }
+void BM_PoseCellFrameRevisitDefault21x21x36(benchmark::State& state) { RunPoseCellRevisits(state, 21, 1.0); }
 
 BENCHMARK(BM_PoseCellFrameStLucia30x30x36)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_PoseCellFrameDefault21x21x36)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PoseCellFrameRevisitStLucia30x30x36)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PoseCellFrameRevisitDefault21x21x36)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
