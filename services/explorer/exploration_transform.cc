@@ -1,5 +1,6 @@
 #include "services/explorer/exploration_transform.h"
 
+#include <algorithm>
 #include <array>
 #include <stdexcept>
 
@@ -12,48 +13,68 @@ std::vector<int32_t> ComputeExplorationTransform(int width, int height,
   const size_t n = static_cast<size_t>(width) * height;
   if (traversable.size() != n || goal.size() != n)
     throw std::invalid_argument("exploration grid masks do not match width x height");
-  std::vector<int32_t> cost(n, kUnreachable);
+  // Padded copy (one blocked cell all round) so the inner loop needs no bounds checks.
+  const int pw = width + 2, ph = height + 2;
+  enum : uint8_t { kBlocked = 0, kTraversable = 1, kGoal = 2 };
+  // Cost and state side by side: each neighbour test touches one cache line.
+  struct Cell {
+    int32_t cost = kUnreachable;
+    uint8_t state = kBlocked;
+  };
+  std::vector<Cell> cells(static_cast<size_t>(pw) * ph);
   // Dial's algorithm: edge costs are at most 14, so a ring of 15 buckets holds every pending cost.
   constexpr int kRing = kDiagonalStepCost + 1;
   std::array<std::vector<int32_t>, kRing> buckets;
-  size_t pending = 0;
-  for (size_t i = 0; i < n; ++i)
-    if (goal[i]) {
-      cost[i] = 0;
-      buckets[0].push_back(static_cast<int32_t>(i));
-      ++pending;
+  for (auto& b : buckets) b.reserve(static_cast<size_t>(width + height) * 4);
+  int empty_buckets_in_a_row = 0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t i = static_cast<size_t>(y) * width + x;
+      const int32_t p = (y + 1) * pw + x + 1;
+      if (goal[i]) {
+        cells[p] = {0, kGoal};
+        buckets[0].push_back(p);
+      } else if (traversable[i]) {
+        cells[p].state = kTraversable;
+      }
     }
-  auto open = [&](int x, int y) {
-    const size_t i = static_cast<size_t>(y) * width + x;
-    return traversable[i] || goal[i];
-  };
-  for (int32_t current = 0; pending > 0; ++current) {
+  const int32_t straight[4] = {1, -1, pw, -pw};
+  // Diagonal offset and the two orthogonal cells it passes between.
+  const int32_t diagonal[4][3] = {{pw + 1, 1, pw}, {pw - 1, -1, pw}, {-pw + 1, 1, -pw}, {-pw - 1, -1, -pw}};
+  // Stops once a whole ring of buckets has come up empty: nothing is pending any more.
+  for (int32_t current = 0; empty_buckets_in_a_row < kRing; ++current) {
     std::vector<int32_t>& bucket = buckets[current % kRing];
+    empty_buckets_in_a_row = bucket.empty() ? empty_buckets_in_a_row + 1 : 0;
+    std::vector<int32_t>& straight_bucket = buckets[(current + kStraightStepCost) % kRing];
+    std::vector<int32_t>& diagonal_bucket = buckets[(current + kDiagonalStepCost) % kRing];
     while (!bucket.empty()) {
       const int32_t i = bucket.back();
       bucket.pop_back();
-      --pending;
-      if (cost[i] != current) continue;  // a stale entry, improved since it was queued
-      const int x = i % width, y = i / width;
-      for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-          if (dx == 0 && dy == 0) continue;
-          const int nx = x + dx, ny = y + dy;
-          if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
-          const int32_t ni = ny * width + nx;
-          if (!traversable[ni]) continue;
-          const bool diagonal = dx != 0 && dy != 0;
-          if (diagonal && !(open(x + dx, y) && open(x, y + dy))) continue;
-          const int32_t candidate = current + (diagonal ? kDiagonalStepCost : kStraightStepCost);
-          if (candidate < cost[ni]) {
-            cost[ni] = candidate;
-            buckets[candidate % kRing].push_back(ni);
-            ++pending;
-          }
+      if (cells[i].cost != current) continue;  // a stale entry, improved since it was queued
+      const int32_t straight_cost = current + kStraightStepCost;
+      for (int32_t off : straight) {
+        const int32_t ni = i + off;
+        Cell& next = cells[ni];
+        if (next.state == kTraversable && straight_cost < next.cost) {
+          next.cost = straight_cost;
+          straight_bucket.push_back(ni);
+        }
+      }
+      const int32_t diagonal_cost = current + kDiagonalStepCost;
+      for (const auto& d : diagonal) {
+        const int32_t ni = i + d[0];
+        Cell& next = cells[ni];
+        if (next.state == kTraversable && diagonal_cost < next.cost && cells[i + d[1]].state != kBlocked &&
+            cells[i + d[2]].state != kBlocked) {
+          next.cost = diagonal_cost;
+          diagonal_bucket.push_back(ni);
         }
       }
     }
   }
+  std::vector<int32_t> cost(n);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) cost[static_cast<size_t>(y) * width + x] = cells[(y + 1) * pw + x + 1].cost;
   return cost;
 }
 

@@ -1,0 +1,84 @@
+// Occupancy mapper hot paths: log-odds grid updates (target >= 50 M cell updates/s) and the
+// Radial Obstacle Profile from one 320x240 frame (target < 1 ms: segmentation + IPM + profile).
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "services/occupancy/camera_model.h"
+#include "services/occupancy/floor_segmenter.h"
+#include "services/occupancy/occupancy_grid.h"
+#include "services/occupancy/radial_obstacle_profile.h"
+#include "tests/unit/occupancy/synthetic_scene.h"
+
+namespace rslam::occupancy {
+namespace {
+
+// A 360-bin pirouette profile: obstacles at 60-100 % of max_range, every 7th bin free.
+RadialObstacleProfile PirouetteProfile(double max_range) {
+  RadialObstacleProfile p;
+  p.first_bearing_rad = -M_PI;
+  p.bin_width_rad = M_PI / 180.0;
+  for (int i = 0; i < 360; ++i) {
+    const float r = static_cast<float>(max_range * (0.6 + 0.4 * std::abs(std::sin(i * 0.05))));
+    p.bins.push_back(RopBin{i % 7 == 0 ? static_cast<float>(max_range) : r, 0.07f,
+                            i % 7 == 0 ? BinStatus::kFree : BinStatus::kObstacle});
+  }
+  return p;
+}
+
+// args: cell size (mm), reliable range (cm)
+void BM_GridInsertProfile(benchmark::State& state) {
+  const double resolution = state.range(0) / 1000.0, range = state.range(1) / 100.0;
+  SensorModelConfig sensor;
+  sensor.reliable_range_m = range;
+  OccupancyGrid grid(GridConfig{resolution, 2000, 2000, -10.0, -10.0}, sensor);
+  const RadialObstacleProfile profile = PirouetteProfile(range);
+  int64_t cells = 0;
+  int i = 0;
+  for (auto _ : state) {
+    const Pose2D pose{std::fmod(i * 0.037, 4.0) - 2.0, std::fmod(i * 0.053, 4.0) - 2.0, i * 0.1};
+    cells += grid.InsertProfile(profile, pose);
+    ++i;
+  }
+  state.SetItemsProcessed(cells);
+  state.counters["cells_per_profile"] = static_cast<double>(cells) / std::max(i, 1);
+}
+BENCHMARK(BM_GridInsertProfile)->Args({10, 40})->Args({10, 200})->Args({40, 400});
+
+struct Pipeline {
+  CameraConfig camera;
+  CameraModel model{camera};
+  InversePerspectiveMap ipm{camera};
+  RopExtractor extractor{RopConfig{}, ipm};
+  FloorSegmenter segmenter{FloorSegmenterConfig{}, testing::kFloorColour};
+  cv::Mat frame;
+  Pipeline() {
+    std::vector<testing::Wall> walls = testing::SquareRoom(0.45);
+    for (const auto& w : testing::Box(0.2, 0.05, 0.27, 0.12, 0.08, {30, 30, 200})) walls.push_back(w);
+    frame = testing::Render(camera, {0.05, 0.0, 0.2}, walls, 3.0, 1, {{0.2, 0.05, 0.27, 0.12, 0.08, {30, 30, 200}}}).image;
+  }
+};
+
+void BM_RopFromFrame(benchmark::State& state) {
+  Pipeline p;
+  for (auto _ : state) {
+    RadialObstacleProfile rop = p.extractor.Extract(p.segmenter.Segment(p.frame));
+    benchmark::DoNotOptimize(rop.bins.data());
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_RopFromFrame)->Unit(benchmark::kMicrosecond);
+
+void BM_RopFromRawFrameWithCorrection(benchmark::State& state) {
+  Pipeline p;
+  for (auto _ : state) {
+    RadialObstacleProfile rop = p.extractor.Extract(p.segmenter.Segment(p.model.Correct(p.frame)));
+    benchmark::DoNotOptimize(rop.bins.data());
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_RopFromRawFrameWithCorrection)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace rslam::occupancy
