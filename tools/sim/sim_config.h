@@ -114,7 +114,8 @@ struct CameraConfig {
             "dead_zone_width_rad", "must be in [0, 2 pi)");
     Require(std::isfinite(rays_per_column) && rays_per_column >= 0.25 && rays_per_column <= 16,
             "rays_per_column", "must be in [0.25, 16]");
-    Require(noise_amplitude >= 0 && noise_amplitude <= 64, "noise_amplitude", "must be in [0, 64]");
+    // Wall texels differ from the floor colour by 20 levels per channel: noise must stay below.
+    Require(noise_amplitude >= 0 && noise_amplitude <= 16, "noise_amplitude", "must be in [0, 16]");
   }
 };
 

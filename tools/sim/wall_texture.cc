@@ -24,7 +24,19 @@ int L1(const Bgr& a, const std::vector<int>& b) {
 Bgr PickColour(HashStream& h, const SceneConfig& scene) {
   for (;;) {
     Bgr c{h.Int(10, 245), h.Int(10, 245), h.Int(10, 245)};
-    if (L1(c, scene.floor_bgr) >= 90 && L1(c, scene.ceiling_bgr) >= 30) return c;
+    if (L1(c, scene.floor_bgr) >= 90 && L1(c, scene.ceiling_bgr) >= 30) return c;  // > 3 x grain
+  }
+}
+
+// Every channel at least kFloorMargin from the floor's: pixel noise (at most 16 levels) can then
+// never turn a wall pixel into the floor colour.
+constexpr int kFloorMargin = 20;
+void KeepAwayFromFloor(const std::vector<int>& floor, Bgr& colour) {
+  for (int k = 0; k < 3; ++k) {
+    colour[k] = std::clamp(colour[k], 0, 255);
+    if (std::abs(colour[k] - floor[k]) >= kFloorMargin) continue;
+    const bool up = colour[k] >= floor[k] ? floor[k] + kFloorMargin <= 255 : floor[k] - kFloorMargin < 0;
+    colour[k] = up ? floor[k] + kFloorMargin : floor[k] - kFloorMargin;
   }
 }
 
@@ -84,6 +96,10 @@ std::vector<uint8_t> BuildAtlas(const SceneConfig& scene) {
             break;
         }
         if (iu == 0) colour = Mix(colour, Bgr{20, 20, 20}, 0.7);  // seam at the panel edge
+        // Fine grain so a wall seen from close up still has texture for visual odometry.
+        const int grain = static_cast<int>(SplitMix64(p * 1000003ull + iu * 1009ull + iv) % 25) - 12;
+        for (int& channel : colour) channel += grain;
+        KeepAwayFromFloor(scene.floor_bgr, colour);
         uint8_t* texel = &atlas[((static_cast<size_t>(p) * kU + iu) * kV + iv) * 3];
         for (int k = 0; k < 3; ++k) texel[k] = static_cast<uint8_t>(std::clamp(colour[k], 0, 255));
       }
