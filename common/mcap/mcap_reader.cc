@@ -122,7 +122,7 @@ void McapReader::Validate() {
 
   const uint64_t data_end = ScanDataSection(footer_offset);
   has_summary_ = summary_start != 0;
-  if (summary_crc != 0) {
+  if (summary_crc != 0 && options_.verify_crcs) {
     const uint64_t crc_end = footer_offset + kRecordPrefixSize + 16;
     const uint32_t crc = Crc32(file_.data() + data_end, crc_end - data_end);
     if (crc != summary_crc) {
@@ -218,7 +218,7 @@ uint64_t McapReader::ScanDataSection(uint64_t end) {
       case Opcode::kDataEnd: {
         RecordCursor c(r.content, content_at, "DataEnd");
         const uint32_t crc = c.U32();
-        if (crc != 0) {
+        if (crc != 0 && options_.verify_crcs) {
           const uint32_t actual = Crc32(file_.data(), pos);
           if (actual != crc) {
             throw McapError(At(pos) + "data section CRC mismatch (Data End says " +
@@ -292,7 +292,7 @@ void McapReader::ScanChunk(uint64_t record_offset, std::span<const std::byte> co
   std::vector<std::byte> plain;
   DecompressChunk(chunk.info.compression, records, chunk.info.uncompressed_size, record_offset,
                   plain);
-  if (crc != 0) {
+  if (crc != 0 && options_.verify_crcs) {
     const uint32_t actual = Crc32(plain.data(), plain.size());
     if (actual != crc) {
       throw McapError(where + "uncompressed CRC mismatch (record says " + std::to_string(crc) +

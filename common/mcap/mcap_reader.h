@@ -30,6 +30,8 @@ namespace rslam::mcap {
 struct McapReaderOptions {
   // Chunks claiming more uncompressed bytes than this are refused (bounds memory on bad input).
   uint64_t max_chunk_uncompressed_bytes = uint64_t{1} << 30;
+  // Check chunk, data-section and summary CRCs (when non-zero). Off only for fuzzing the parser.
+  bool verify_crcs = true;
 };
 
 struct MessageView {
