@@ -288,11 +288,17 @@ bool WorldMap::IsDiscFree(const Eigen::Vector2d& p, double radius) const {
   return true;
 }
 
-std::vector<Eigen::Vector2i> WorldMap::ReachableFreeCells(const Eigen::Vector2d& start) const {
+std::vector<Eigen::Vector2i> WorldMap::ReachableFreeCells(const Eigen::Vector2d& start, double robot_radius_m) const {
   std::vector<Eigen::Vector2i> out;
   if (!start.allFinite()) throw std::invalid_argument("ReachableFreeCells: non-finite start");
+  if (!std::isfinite(robot_radius_m) || robot_radius_m < 0) {
+    throw std::invalid_argument("ReachableFreeCells: robot radius must be finite and >= 0");
+  }
+  const auto enterable = [&](const Eigen::Vector2i& c) {
+    return Classify(c) == CellClass::kFree && (robot_radius_m == 0.0 || IsDiscFree(CellCenter(c), robot_radius_m));
+  };
   const Eigen::Vector2i s = WorldToCell(start);
-  if (Classify(s) != CellClass::kFree) return out;
+  if (!enterable(s)) return out;
   std::vector<uint8_t> seen(cells_.size(), 0);
   std::deque<Eigen::Vector2i> queue{s};
   seen[static_cast<size_t>(s.y()) * width_ + s.x()] = 1;
@@ -307,6 +313,7 @@ std::vector<Eigen::Vector2i> WorldMap::ReachableFreeCells(const Eigen::Vector2d&
       uint8_t& flag = seen[static_cast<size_t>(n.y()) * width_ + n.x()];
       if (flag) continue;
       flag = 1;
+      if (!enterable(n)) continue;
       queue.push_back(n);
     }
   }

@@ -77,8 +77,10 @@ class WorldMap {
   bool IsDiscFree(const Eigen::Vector2d& p, double radius) const;
 
   // Free cells reachable from the start point by 4-connected steps through free cells (flood
-  // fill), sorted by (iy, ix). Empty when the start is not in a free cell.
-  std::vector<Eigen::Vector2i> ReachableFreeCells(const Eigen::Vector2d& start) const;
+  // fill), sorted by (iy, ix). Empty when the start is not in a free cell. With a robot radius,
+  // only cells where the robot's disc fits (centred on the cell) are entered: the places the robot
+  // itself can reach, not squeezing through gaps narrower than the robot.
+  std::vector<Eigen::Vector2i> ReachableFreeCells(const Eigen::Vector2d& start, double robot_radius_m = 0.0) const;
 
   // A deterministic sensible start: the free cell farthest from any wall within the largest
   // 4-connected free region (ties: nearest the region's centroid, then lowest iy, ix), heading 0.

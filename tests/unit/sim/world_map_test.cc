@@ -233,6 +233,30 @@ TEST(WorldMapTest, ReachableFreeCellsOfAHandmadeMap) {
   EXPECT_LT(start.x, 3.0);
 }
 
+TEST(WorldMapTest, ReachableCellsForARobotDoNotSqueezeThroughNarrowGaps) {
+  // Two 1 m rooms joined by a 2-cell (8 cm) gap in the wall between them.
+  const int w = 52, h = 27;
+  std::vector<CellClass> cells(w * h, CellClass::kFree);
+  for (int iy = 0; iy < h; ++iy) {
+    for (int ix = 0; ix < w; ++ix) {
+      const bool border = ix == 0 || iy == 0 || ix == w - 1 || iy == h - 1;
+      const bool divider = ix == 26 && !(iy == 13 || iy == 14);
+      if (border || divider) cells[iy * w + ix] = CellClass::kOccupied;
+    }
+  }
+  const WorldMap world(w, h, 0.04, Eigen::Vector2d(0, 0), cells);
+  const Eigen::Vector2d start(0.5, 0.5);
+  const auto all = world.ReachableFreeCells(start);
+  const auto robot = world.ReachableFreeCells(start, 0.1);
+  EXPECT_EQ(all.size(), static_cast<size_t>(50 * 25 - 23));  // both rooms and the gap
+  ASSERT_FALSE(robot.empty());
+  for (const auto& c : robot) {
+    EXPECT_LT(c.x(), 26);
+    EXPECT_TRUE(world.IsDiscFree(world.CellCenter(c), 0.1));
+  }
+  EXPECT_THROW(world.ReachableFreeCells(start, -1.0), std::invalid_argument);
+}
+
 TEST(WorldMapTest, DefaultStartIsDeterministicAndFarFromWalls) {
   const WorldMap world = BoxRoom(41, 21);
   const Pose2D start = world.DefaultStartPose();
