@@ -2,6 +2,7 @@
 // Configuration of TemplateLibrary (YAML section `templates:`). Patch-mode keys follow
 // OpenRatSLAM's local view settings (image_crop_*, template_*_size, vt_*), without the prefix.
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -99,6 +100,8 @@ struct TemplateConfig {
             "must be -1 or greater than image_crop_y_min");
     Require(template_x_size >= 1 && template_x_size <= 4096, "template_x_size", "must be in 1..4096");
     Require(template_y_size >= 1 && template_y_size <= 4096, "template_y_size", "must be in 1..4096");
+    Require(static_cast<int64_t>(template_x_size) * template_y_size <= (1 << 20), "template_y_size",
+            "template_x_size * template_y_size must be at most 1048576 pixels");
     Require(normalisation >= 0 && normalisation <= 1, "normalisation", "must be in [0, 1]");
     Require(patch_normalisation >= 0, "patch_normalisation", "must be >= 0");
     Require(min_patch_normalisation_std >= 0, "min_patch_normalisation_std", "must be >= 0");

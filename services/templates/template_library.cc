@@ -34,6 +34,19 @@ inline uint32_t RowSad(const uint8_t* a, const uint8_t* b, int n) {
     const __m128i vb = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + i));
     acc = _mm_add_epi64(acc, _mm_sad_epu8(va, vb));
   }
+  if (i < n && n >= 16) {
+    // The tail as one more 16-byte load ending at n, with the lanes already counted masked to 0.
+    alignas(16) static constexpr uint8_t kLanes[32] = {0,    0,    0,    0,    0,    0,    0,    0,
+                                                       0,    0,    0,    0,    0,    0,    0,    0,
+                                                       0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,
+                                                       0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff};
+    const int tail = n - i;  // 1..15 new lanes at the top of the load
+    const __m128i mask = _mm_loadu_si128(reinterpret_cast<const __m128i*>(kLanes + tail));
+    const __m128i va = _mm_and_si128(mask, _mm_loadu_si128(reinterpret_cast<const __m128i*>(a + n - 16)));
+    const __m128i vb = _mm_and_si128(mask, _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + n - 16)));
+    acc = _mm_add_epi64(acc, _mm_sad_epu8(va, vb));
+    i = n;
+  }
   sum = static_cast<uint32_t>(_mm_cvtsi128_si32(acc)) +
         static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_srli_si128(acc, 8)));
 #endif
@@ -77,7 +90,42 @@ TemplateLibrary::TemplateLibrary(TemplateConfig config)
       if (m != 0) shifts_.push_back(-m);
     }
   }
+  // Template columns [template_x0, template_x0 + length) are compared with view columns
+  // shifted by s: the view's pixel at x + s against the template's at x.
+  for (int s : shifts_) {
+    ShiftWindow w;
+    w.shift = s;
+    if (config_.panoramic) {  // the view's rows are doubled, so a wrapped window is contiguous
+      w.template_x0 = 0;
+      w.view_x0 = ((s % width_) + width_) % width_;
+      w.length = width_;
+    } else if (column_mode_) {  // paper 000 eq. 8: the whole w - |s| overlap
+      w.template_x0 = std::max(0, -s);
+      w.view_x0 = w.template_x0 + s;
+      w.length = width_ - std::abs(s);
+    } else {  // OpenRatSLAM: the view's centre window, a constant w - 2 * shift_match columns
+      w.template_x0 = config_.shift_match;
+      w.view_x0 = w.template_x0 + s;
+      w.length = width_ - 2 * config_.shift_match;
+    }
+    w.sad_per_difference = 255.0 * w.length * height_;
+    windows_.push_back(w);
+  }
 }
+
+namespace {
+
+// prefix[x] = sum of pixels in columns < x, for x in 0..width (prefix has width + 1 entries).
+void ColumnPrefix(const uint8_t* pixels, int width, int height, int stride, uint32_t* prefix) {
+  prefix[0] = 0;
+  for (int x = 0; x < width; ++x) {
+    uint32_t column = 0;
+    for (int y = 0; y < height; ++y) column += pixels[static_cast<std::size_t>(y) * stride + x];
+    prefix[x + 1] = prefix[x] + column;
+  }
+}
+
+}  // namespace
 
 uint32_t TemplateLibrary::Store(const EncodedView& view) {
   if (size() >= std::numeric_limits<uint32_t>::max()) throw std::length_error("TemplateLibrary: too many templates");
@@ -87,81 +135,78 @@ uint32_t TemplateLibrary::Store(const EncodedView& view) {
   if (histogram_mode_) {
     histograms_.insert(histograms_.end(), view.histogram.begin(), view.histogram.end());
     histogram_self_terms_.push_back(JeffreySelfTerm(view.histogram));
+  } else {
+    column_prefix_.resize(column_prefix_.size() + width_ + 1);
+    ColumnPrefix(view.pixels.data(), width_, height_, width_, column_prefix_.data() + column_prefix_.size() - (width_ + 1));
   }
   return id;
 }
 
-const uint8_t* TemplateLibrary::PrepareShiftedView(const EncodedView& view, std::vector<uint8_t>& buffer) const {
-  if (!config_.panoramic) return view.pixels.data();
-  // Each row twice, so every wrapped shift is one contiguous run.
-  buffer.resize(static_cast<std::size_t>(template_size_) * 2);
-  for (int y = 0; y < height_; ++y) {
-    const uint8_t* row = view.pixels.data() + static_cast<std::size_t>(y) * width_;
-    uint8_t* out = buffer.data() + static_cast<std::size_t>(y) * 2 * width_;
-    std::copy_n(row, width_, out);
-    std::copy_n(row, width_, out + width_);
+void TemplateLibrary::PrepareView(const EncodedView& view, PreparedView& prepared) const {
+  prepared.mean = view.mean;
+  if (config_.panoramic) {
+    prepared.doubled_rows.resize(static_cast<std::size_t>(template_size_) * 2);
+    for (int y = 0; y < height_; ++y) {
+      const uint8_t* row = view.pixels.data() + static_cast<std::size_t>(y) * width_;
+      uint8_t* out = prepared.doubled_rows.data() + static_cast<std::size_t>(y) * 2 * width_;
+      std::copy_n(row, width_, out);
+      std::copy_n(row, width_, out + width_);
+    }
+    prepared.rows = prepared.doubled_rows.data();
+    prepared.stride = 2 * width_;
+  } else {
+    prepared.rows = view.pixels.data();
+    prepared.stride = width_;
   }
-  return buffer.data();
+  prepared.column_prefix.resize(prepared.stride + 1);
+  ColumnPrefix(prepared.rows, prepared.stride, height_, prepared.stride, prepared.column_prefix.data());
 }
 
-double TemplateLibrary::TemplateDifference(const uint8_t* view_rows, uint32_t id, double bound, int& best_shift,
+double TemplateLibrary::TemplateDifference(const PreparedView& view, uint32_t id, double bound, int& best_shift,
                                            double* lower_bound) const {
   const uint8_t* tmpl = pixels_.data() + static_cast<std::size_t>(id) * template_size_;
-  const int view_stride = config_.panoramic ? 2 * width_ : width_;
+  const uint32_t* tmpl_prefix = column_prefix_.data() + static_cast<std::size_t>(id) * (width_ + 1);
   double best = kInfinity;
-  for (int s : shifts_) {
-    // Template columns [template_x0, template_x0 + length) against view columns shifted by s:
-    // the view's pixel at x + s is compared with the template's at x.
-    int template_x0, view_x0, length;
-    if (config_.panoramic) {
-      template_x0 = 0;
-      view_x0 = ((s % width_) + width_) % width_;
-      length = width_;
-    } else if (column_mode_) {  // paper 000 eq. 8: the whole w - |s| overlap
-      template_x0 = std::max(0, -s);
-      view_x0 = template_x0 + s;
-      length = width_ - std::abs(s);
-    } else {  // OpenRatSLAM: the view's centre window, a constant w - 2 * shift_match columns
-      template_x0 = config_.shift_match;
-      view_x0 = template_x0 + s;
-      length = width_ - 2 * config_.shift_match;
-    }
-    const double pixels = static_cast<double>(length) * height_;
-    const double cap = std::min(best, bound) * 255.0 * pixels;
+  double smallest_seen = kInfinity;
+  for (const ShiftWindow& w : windows_) {
+    const double cap = std::min(best, bound) * w.sad_per_difference;
     const uint64_t limit = cap >= 4e18 ? std::numeric_limits<uint64_t>::max() : static_cast<uint64_t>(cap);
-    uint64_t sad = 0;
-    bool abandoned = false;
-    for (int y = 0; y < height_; ++y) {
-      sad += RowSad(tmpl + static_cast<std::size_t>(y) * width_ + template_x0,
-                    view_rows + static_cast<std::size_t>(y) * view_stride + view_x0, length);
-      if (sad > limit) {
-        abandoned = true;
-        break;
+    // Lower bound first: |sum(a) - sum(b)| <= sum |a - b|.
+    const int64_t window_gap =
+        static_cast<int64_t>(tmpl_prefix[w.template_x0 + w.length] - tmpl_prefix[w.template_x0]) -
+        static_cast<int64_t>(view.column_prefix[w.view_x0 + w.length] - view.column_prefix[w.view_x0]);
+    uint64_t sad = static_cast<uint64_t>(window_gap < 0 ? -window_gap : window_gap);
+    bool abandoned = sad > limit;
+    if (!abandoned) {
+      sad = 0;
+      const uint8_t* t = tmpl + w.template_x0;
+      const uint8_t* v = view.rows + w.view_x0;
+      for (int y = 0; y < height_; ++y, t += width_, v += view.stride) {
+        sad += RowSad(t, v, w.length);
+        if (sad > limit) {
+          abandoned = true;
+          break;
+        }
       }
     }
-    const double difference = static_cast<double>(sad) / (255.0 * pixels);
-    if (abandoned) {
-      // The full difference is at least the partial one.
-      if (lower_bound) *lower_bound = std::min(*lower_bound, difference);
-      continue;
-    }
-    if (lower_bound) *lower_bound = std::min(*lower_bound, difference);
-    if (difference < best) {
+    // Abandoned, the full difference is at least the partial one: still a lower bound.
+    const double difference = static_cast<double>(sad) / w.sad_per_difference;
+    smallest_seen = std::min(smallest_seen, difference);
+    if (!abandoned && difference < best) {
       best = difference;
-      best_shift = s;
+      best_shift = w.shift;
     }
   }
+  if (lower_bound) *lower_bound = std::min(*lower_bound, smallest_seen);
   return best;
 }
 
-TemplateLibrary::Best TemplateLibrary::BestGridMatch(const EncodedView& view, bool prefilter) const {
+TemplateLibrary::Best TemplateLibrary::BestGridMatch(const PreparedView& view, bool prefilter) const {
   Best best;
   // Only a difference within the threshold can be a match, so every template is abandoned as
   // soon as its partial sum passes the threshold (or the best so far, once one is found).
   best.difference = config_.match_threshold;
   double smallest_lower_bound = kInfinity;
-  std::vector<uint8_t>& rows = const_cast<std::vector<uint8_t>&>(scratch_rows_);
-  const uint8_t* view_rows = PrepareShiftedView(view, rows);
   const double gap_limit = config_.match_threshold + kMeanPrefilterSlack;
   const auto count = static_cast<uint32_t>(size());
   for (uint32_t id = 0; id < count; ++id) {
@@ -174,7 +219,7 @@ TemplateLibrary::Best TemplateLibrary::BestGridMatch(const EncodedView& view, bo
     }
     int shift = 0;
     double lower_bound = kInfinity;
-    const double difference = TemplateDifference(view_rows, id, best.difference, shift, &lower_bound);
+    const double difference = TemplateDifference(view, id, best.difference, shift, &lower_bound);
     if (difference <= best.difference && (!best.found || difference < best.difference)) {
       best = {id, shift, difference, true};
     }
@@ -253,7 +298,8 @@ ViewMatch TemplateLibrary::MatchOrLearn(const cv::Mat& grey) {
     if (best.found) return {best.id, false, ShiftToAngle(best.shift), best.difference};
     return {Store(scratch_), true, 0.0, best_divergence};
   }
-  const Best best = BestGridMatch(scratch_, config_.mean_prefilter);
+  PrepareView(scratch_, scratch_prepared_);
+  const Best best = BestGridMatch(scratch_prepared_, config_.mean_prefilter);
   if (best.found && best.difference <= config_.match_threshold) {
     return {best.id, false, ShiftToAngle(best.shift), best.difference};
   }
@@ -278,11 +324,11 @@ std::vector<double> TemplateLibrary::Differences(const cv::Mat& grey) const {
     }
     return differences;
   }
-  std::vector<uint8_t> rows;
-  const uint8_t* view_rows = PrepareShiftedView(view, rows);
+  PreparedView prepared;
+  PrepareView(view, prepared);
   for (std::size_t id = 0; id < size(); ++id) {
     int shift = 0;
-    differences[id] = TemplateDifference(view_rows, static_cast<uint32_t>(id), kInfinity, shift);
+    differences[id] = TemplateDifference(prepared, static_cast<uint32_t>(id), kInfinity, shift);
   }
   return differences;
 }

@@ -86,15 +86,24 @@ class TemplateLibrary {
     bool found = false;
   };
 
+  // The view laid out for shifted comparison (rows doubled when panoramic, so every wrapped
+  // shift is one contiguous run) with prefix sums of its column sums.
+  struct PreparedView {
+    std::vector<uint8_t> doubled_rows;
+    std::vector<uint32_t> column_prefix;  // column_prefix[x] = sum of all pixels left of column x
+    const uint8_t* rows = nullptr;
+    int stride = 0;
+    float mean = 0.0f;
+  };
+
   uint32_t Store(const EncodedView& view);
-  // Prepares scratch_view_ (rows doubled when panoramic) from view.
-  const uint8_t* PrepareShiftedView(const EncodedView& view, std::vector<uint8_t>& buffer) const;
+  void PrepareView(const EncodedView& view, PreparedView& prepared) const;
   // Minimum over shifts of template `id`, or +infinity when every shift passed `bound` (a shift
   // is abandoned as soon as its partial sum does). lower_bound (optional) gets the smallest
   // difference or partial difference seen: the template's difference is at least that.
-  double TemplateDifference(const uint8_t* view_rows, uint32_t id, double bound, int& best_shift,
+  double TemplateDifference(const PreparedView& view, uint32_t id, double bound, int& best_shift,
                             double* lower_bound = nullptr) const;
-  Best BestGridMatch(const EncodedView& view, bool prefilter) const;
+  Best BestGridMatch(const PreparedView& view, bool prefilter) const;
   Best BestHistogramMatch(const EncodedView& view, double& best_divergence) const;
   double RotationDifference(const EncodedView& view, uint32_t id, int& best_rotation) const;
   double ShiftToAngle(int shift) const;
@@ -106,15 +115,27 @@ class TemplateLibrary {
   const int width_;
   const int height_;
   const int template_size_;
+  struct ShiftWindow {
+    int shift;
+    int template_x0;
+    int view_x0;
+    int length;
+    double sad_per_difference;  // 255 * pixels compared
+  };
   std::vector<int> shifts_;                 // tried in this order (smallest |s| first)
+  std::vector<ShiftWindow> windows_;        // one per shift (column, patch)
   std::vector<uint8_t> dead_column_;        // histogram mode: 1 where the dead zone is
 
   std::vector<uint8_t> pixels_;             // size() * template_size_
   std::vector<float> means_;                // per template
+  // Per template, prefix sums of its column sums (width + 1 each): the sum over any column
+  // window in O(1), and |window sum difference| is a lower bound of the window's SAD, so most
+  // shifts of a dissimilar template are rejected without touching its pixels.
+  std::vector<uint32_t> column_prefix_;
   std::vector<float> histograms_;           // histogram mode: size() * bins
   std::vector<double> histogram_self_terms_;  // JeffreySelfTerm per template
   EncodedView scratch_;                     // reused each frame: no per-frame allocation
-  std::vector<uint8_t> scratch_rows_;
+  PreparedView scratch_prepared_;
 };
 
 }  // namespace rslam::templates
