@@ -181,4 +181,48 @@ bool ExplorationPlanner::IsPathClear(const GridView& occupancy, const Pose2D& fr
   return true;
 }
 
+proto::ExplorerState ExplorationPlanner::ToProto() const {
+  proto::ExplorerState state;
+  for (const SetAsideGoal& g : set_aside_) {
+    auto* out = state.add_set_aside();
+    out->mutable_cell()->set_x(g.x);
+    out->mutable_cell()->set_y(g.y);
+    out->set_reason(g.reason);
+  }
+  for (const auto& [cell, attempts] : blocked_attempts_) {
+    auto* out = state.add_blocked();
+    out->mutable_cell()->set_x(cell.first);
+    out->mutable_cell()->set_y(cell.second);
+    out->set_attempts(attempts);
+  }
+  if (last_pirouette_) {
+    state.mutable_last_pirouette()->set_x(last_pirouette_->x);
+    state.mutable_last_pirouette()->set_y(last_pirouette_->y);
+    state.mutable_last_pirouette()->set_theta(last_pirouette_->theta);
+  }
+  return state;
+}
+
+void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
+  std::vector<SetAsideGoal> set_aside;
+  std::map<std::pair<int, int>, int> blocked;
+  for (const auto& g : state.set_aside()) {
+    if (g.cell().x() < 0 || g.cell().y() < 0) throw std::invalid_argument("explorer state: negative goal cell");
+    set_aside.push_back({g.cell().x(), g.cell().y(), g.reason()});
+  }
+  for (const auto& b : state.blocked()) {
+    if (b.cell().x() < 0 || b.cell().y() < 0 || b.attempts() < 0)
+      throw std::invalid_argument("explorer state: bad blocked-goal entry");
+    blocked[{b.cell().x(), b.cell().y()}] = b.attempts();
+  }
+  std::optional<Pose2D> last;
+  if (state.has_last_pirouette()) {
+    last = Pose2D{state.last_pirouette().x(), state.last_pirouette().y(), state.last_pirouette().theta()};
+    if (!IsFinite(*last)) throw std::invalid_argument("explorer state: last pirouette pose not finite");
+  }
+  set_aside_ = std::move(set_aside);
+  blocked_attempts_ = std::move(blocked);
+  last_pirouette_ = last;
+}
+
 }  // namespace rslam::explorer

@@ -22,6 +22,7 @@
 #include "services/explorer/configuration_space.h"
 #include "services/explorer/explorer_config.h"
 #include "services/explorer/grid_view.h"
+#include "services/explorer/proto/explorer_state.pb.h"
 
 namespace rslam::explorer {
 
@@ -70,6 +71,10 @@ class ExplorationPlanner {
   void ReportBlocked(const Plan& plan);
 
   const std::vector<SetAsideGoal>& set_aside_goals() const { return set_aside_; }
+
+  proto::ExplorerState ToProto() const;
+  // Replaces this planner's state; validates the whole message first (std::invalid_argument).
+  void LoadProto(const proto::ExplorerState& state);
   const ExplorerConfig& config() const { return config_; }
 
  private:
@@ -80,8 +85,6 @@ class ExplorationPlanner {
   std::optional<Pose2D> last_pirouette_;
   std::map<std::pair<int, int>, int> blocked_attempts_;
   std::vector<SetAsideGoal> set_aside_;
-  std::vector<uint8_t> set_aside_mask_;  // over the last coarse grid's cells
-  int mask_width_ = 0, mask_height_ = 0;
 };
 
 }  // namespace rslam::explorer

@@ -129,6 +129,28 @@ TEST(ExplorationPlannerTest, GoalBlockedRepeatedlyIsSetAside) {
   EXPECT_NE(planner.set_aside_goals()[0].reason.find("blocked"), std::string::npos);
 }
 
+TEST(ExplorationPlannerTest, SavedStateKeepsSetAsideGoalsAcrossARestart) {
+  TestGrid grid(20, 20, 0);
+  grid.Set(10, 10, -1);
+  ExplorationPlanner planner(Config());
+  Plan plan = planner.PlanFrom(grid.View(), {0.25, 0.25, 0.0});
+  planner.RecordPirouette(plan.target);
+  ASSERT_TRUE(planner.PlanFrom(grid.View(), plan.target).complete);
+  proto::ExplorerState saved;
+  ASSERT_TRUE(saved.ParseFromString(planner.ToProto().SerializeAsString()));
+
+  ExplorationPlanner restarted(Config());
+  EXPECT_FALSE(restarted.PlanFrom(grid.View(), {0.25, 0.25, 0.0}).complete);  // would go again
+  restarted.LoadProto(saved);
+  EXPECT_TRUE(restarted.PlanFrom(grid.View(), {0.25, 0.25, 0.0}).complete);
+  ASSERT_EQ(restarted.set_aside_goals().size(), 1u);
+  EXPECT_EQ(restarted.set_aside_goals()[0].reason, planner.set_aside_goals()[0].reason);
+
+  saved.mutable_last_pirouette()->set_x(NAN);
+  EXPECT_THROW(restarted.LoadProto(saved), std::invalid_argument);
+  EXPECT_EQ(restarted.set_aside_goals().size(), 1u);  // nothing half-loaded
+}
+
 TEST(ExplorationPlannerTest, RejectsBadInput) {
   TestGrid grid(20, 20, 0);
   ExplorationPlanner planner(Config());
