@@ -60,7 +60,7 @@ PoseCellNetwork::PoseCellNetwork(const PoseCellConfig& config)
   buf_b_.assign(cells, 0.0f);
   buf_c_.assign(cells, 0.0f);
   for (RowFlags* r : {&rows_act_, &rows_a_, &rows_b_, &rows_c_}) {
-    r->assign(static_cast<size_t>(dim_xy_) * dim_th_, 0);
+    r->assign(static_cast<size_t>(dim_xy_) * dim_th_, RowExtent{});
   }
   for (AxisSet* s : {&xs_, &ys_, &ex_xs_, &ex_ys_, &tmp_xs_, &tmp_ys_}) {
     s->Reset(dim_xy_);
@@ -113,16 +113,18 @@ void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, con
   for (int t : ts.index) {
     for (int y : ys.index) {
       const float* row = &activity_[Flat(0, y, t)];
-      bool any = false;
+      int lo = dim_xy_, hi = 0;
       for (auto [b, e] : xs.runs) {
         for (int x = b; x < e; ++x) {
-          const bool nz = row[x] != 0.0f;
-          xs_.member[x] |= nz;
-          any |= nz;
+          if (row[x] != 0.0f) {
+            xs_.member[x] = 1;
+            lo = std::min(lo, x);
+            hi = x + 1;
+          }
         }
       }
-      rows_act_[Row(y, t)] = any;
-      if (any) ys_.member[y] = ts_.member[t] = 1;
+      rows_act_[Row(y, t)] = lo < hi ? RowExtent{lo, hi} : RowExtent{};
+      if (lo < hi) ys_.member[y] = ts_.member[t] = 1;
     }
   }
   xs_.Finish();
@@ -144,15 +146,23 @@ void PoseCellNetwork::ConvolveX(const std::vector<float>& in, const RowFlags& in
   const int n = dim_xy_;
   for (int t : ts.index) {
     for (int y : ys.index) {
-      out_rows[Row(y, t)] = in_rows[Row(y, t)];
-      if (!in_rows[Row(y, t)]) continue;
+      const RowExtent ein = in_rows[Row(y, t)];
+      if (ein.empty()) {
+        out_rows[Row(y, t)] = RowExtent{};
+        continue;
+      }
+      const RowExtent eout = (ein.lo - c < 0 || ein.hi + c > n) ? RowExtent{0, n}
+                                                               : RowExtent{ein.lo - c, ein.hi + c};
+      out_rows[Row(y, t)] = eout;
       const float* src = &in[Flat(0, y, t)];
       float* dst = &out[Flat(0, y, t)];
       for (int k = 0; k < k_dim; ++k) {
         const float wk = w[k];
         const int shift = k - c;  // dst[x] += wk * src[x + shift], wrapped
-        for (auto [b, e] : xs_out.runs) {
-          // Split [b, e) where x + shift leaves [0, n).
+        for (auto [run_b, run_e] : xs_out.runs) {
+          const int b = std::max(run_b, eout.lo), e = std::min(run_e, eout.hi);
+          if (b >= e) continue;
+          // Split [b, e) where x + shift leaves [0, n), so the inner loops never wrap.
           int lo = b;
           if (lo + shift < 0) {
             const int stop = std::min(e, -shift);
@@ -178,17 +188,22 @@ void PoseCellNetwork::ConvolveY(const std::vector<float>& in, const RowFlags& in
   for (int t : ts.index) {
     for (int y : ys_out.index) {
       float* dst = &out[Flat(0, y, t)];
-      uint8_t any = 0;
+      RowExtent acc{dim_xy_, 0};
       for (int k = 0; k < k_dim; ++k) {
         const int ys = Wrap(y + k - c, dim_xy_);
-        if (!ys_in.member[ys] || !in_rows[Row(ys, t)]) continue;
-        any = 1;
+        if (!ys_in.member[ys]) continue;
+        const RowExtent ein = in_rows[Row(ys, t)];
+        if (ein.empty()) continue;
+        acc.lo = std::min(acc.lo, ein.lo);
+        acc.hi = std::max(acc.hi, ein.hi);
         const float* src = &in[Flat(0, ys, t)];
         const float wk = w[k];
-        for (auto [b, e] : xs.runs)
+        for (auto [run_b, run_e] : xs.runs) {
+          const int b = std::max(run_b, ein.lo), e = std::min(run_e, ein.hi);
           for (int x = b; x < e; ++x) dst[x] += wk * src[x];
+        }
       }
-      out_rows[Row(y, t)] = any;
+      out_rows[Row(y, t)] = acc.empty() ? RowExtent{} : acc;
     }
   }
 }
@@ -201,19 +216,27 @@ void PoseCellNetwork::ConvolveTh(const std::vector<float>& in, const RowFlags& i
   const int k_dim = static_cast<int>(w.size());
   const int c = k_dim / 2;
   for (int t : ts_out.index) {
-    for (int y : ys.index) out_rows[Row(y, t)] = 0;
+    for (int y : ys.index) out_rows[Row(y, t)] = RowExtent{dim_xy_, 0};
     for (int k = 0; k < k_dim; ++k) {
       const int tsrc = Wrap(t + k - c, dim_th_);
       if (!ts_in.member[tsrc]) continue;
       const float wk = w[k];
       for (int y : ys.index) {
-        if (!in_rows[Row(y, tsrc)]) continue;
-        out_rows[Row(y, t)] = 1;
+        const RowExtent ein = in_rows[Row(y, tsrc)];
+        if (ein.empty()) continue;
+        RowExtent& acc = out_rows[Row(y, t)];
+        acc.lo = std::min(acc.lo, ein.lo);
+        acc.hi = std::max(acc.hi, ein.hi);
         const float* src = &in[Flat(0, y, tsrc)];
         float* dst = &out[Flat(0, y, t)];
-        for (auto [b, e] : xs.runs)
+        for (auto [run_b, run_e] : xs.runs) {
+          const int b = std::max(run_b, ein.lo), e = std::min(run_e, ein.hi);
           for (int x = b; x < e; ++x) dst[x] += wk * src[x];
+        }
       }
+    }
+    for (int y : ys.index) {
+      if (out_rows[Row(y, t)].empty()) out_rows[Row(y, t)] = RowExtent{};
     }
   }
 }
@@ -242,7 +265,7 @@ void PoseCellNetwork::ExciteInhibitNormalise() {
   std::fill(tmp_ts_.member.begin(), tmp_ts_.member.end(), 0);
   for (int t : ex_ts_.index) {
     for (int y : ex_ys_.index) {
-      if (!rows_c_[Row(y, t)]) continue;
+      if (rows_c_[Row(y, t)].empty()) continue;
       const float* e = &buf_c_[Flat(0, y, t)];
       bool any = false;
       for (auto [b, end] : ex_xs_.runs) {
@@ -273,7 +296,7 @@ void PoseCellNetwork::ExciteInhibitNormalise() {
       float* a = &activity_[row];
       const float* e = &buf_c_[row];
       float* inh = &buf_a_[row];
-      if (!rows_c_[Row(y, t)]) {  // no excitation here: activity stays 0, clear the scratch
+      if (rows_c_[Row(y, t)].empty()) {  // no excitation here: activity stays 0, clear the scratch
         for (auto [b, end] : tmp_xs_.runs) std::fill(inh + b, inh + end, 0.0f);
         continue;
       }
@@ -336,7 +359,7 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
       const float fy = static_cast<float>(sy - fy_floor);
       const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
       for (int y : ys_.index) {
-        if (!rows_act_[Row(y, t)]) continue;
+        if (rows_act_[Row(y, t)].empty()) continue;
         const float* src = &activity_[Flat(0, y, t)];
         const int y0 = Wrap(y + iy, dim_xy_);
         const int y1 = y0 + 1 == dim_xy_ ? 0 : y0 + 1;
@@ -377,7 +400,7 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
       tmp_ts_.member[t0] = 1;
       if (f > 0.0f) tmp_ts_.member[t1] = 1;
       for (int y : ys_.index) {
-        if (!rows_act_[Row(y, t)]) continue;
+        if (rows_act_[Row(y, t)].empty()) continue;
         const float* src = &activity_[Flat(0, y, t)];
         float* d0 = &buf_a_[Flat(0, y, t0)];
         float* d1 = &buf_a_[Flat(0, y, t1)];
@@ -455,17 +478,22 @@ PoseCellPosition PoseCellNetwork::UpdateBestPose() {
 }
 
 void PoseCellNetwork::Step(double vtrans_mps, double vrot_radps, double dt_s) {
+  ValidateFrame(vtrans_mps, vrot_radps, dt_s, 0, 0.0);  // before anything changes
   ExciteInhibitNormalise();
   PathIntegrate(vtrans_mps, vrot_radps, dt_s);
   UpdateBestPose();
 }
 
 void PoseCellNetwork::InjectEnergy(int x, int y, int th, double energy) {
+  if (!std::isfinite(energy) || energy < 0) {
+    throw std::invalid_argument("pose cells: injected energy must be finite and >= 0");
+  }
   x = Wrap(x, dim_xy_);
   y = Wrap(y, dim_xy_);
   th = Wrap(th, dim_th_);
   activity_[Flat(x, y, th)] += static_cast<float>(energy);
-  rows_act_[Row(y, th)] = 1;
+  RowExtent& row = rows_act_[Row(y, th)];
+  row = row.empty() ? RowExtent{x, x + 1} : RowExtent{std::min(row.lo, x), std::max(row.hi, x + 1)};
   auto add = [](AxisSet& s, int i) {
     if (s.member[i]) return;
     s.member[i] = 1;

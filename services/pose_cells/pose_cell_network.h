@@ -142,9 +142,14 @@ class PoseCellNetwork {
   void ZeroRegion(std::vector<float>& buf, const AxisSet& xs, const AxisSet& ys, const AxisSet& ts);
   // Recomputes the active sets of activity_ from scratch within the given region.
   void RecomputeSupport(const AxisSet& xs, const AxisSet& ys, const AxisSet& ts);
-  // Row flags (one per (theta, y) row: any non-zero cell) let the passes skip the empty rows of
-  // the box, which matter when a view injection starts a second packet far from the first.
-  using RowFlags = std::vector<uint8_t>;
+  // Per (theta, y) row: an interval [lo, hi) of x that covers every non-zero cell of the row
+  // (empty when lo >= hi). The passes skip empty rows and the parts of the box outside a row's
+  // interval, which matter when a view injection starts a second packet far from the first.
+  struct RowExtent {
+    int lo = 0, hi = 0;
+    bool empty() const { return lo >= hi; }
+  };
+  using RowFlags = std::vector<RowExtent>;
   void ConvolveX(const std::vector<float>& in, const RowFlags& in_rows, std::vector<float>& out,
                  RowFlags& out_rows, const std::vector<float>& w, const AxisSet& xs_out,
                  const AxisSet& ys, const AxisSet& ts) const;
