@@ -58,7 +58,9 @@ TEST(TemplateLibraryTest, DifferentImageLearnsANewTemplateWithDenseIds) {
     const ViewMatch m = library.MatchOrLearn(Texture(640, 480, 100 + i));
     EXPECT_TRUE(m.is_new);
     EXPECT_EQ(m.template_id, i);
-    if (i > 0) EXPECT_GT(m.difference, StLucia().match_threshold);
+    if (i > 0) {
+      EXPECT_GT(m.difference, StLucia().match_threshold);
+    }
   }
   EXPECT_EQ(library.Learn(Texture(640, 480, 100)), 5u);  // Learn always stores
   EXPECT_EQ(library.size(), 6u);
