@@ -46,6 +46,15 @@ enum class Opcode : uint8_t {
   kDataEnd = 0x0F,
 };
 
+// Names rslam's recorder and player agree on (schema/message encodings, channel metadata keys).
+inline constexpr const char* kProfileRslam = "rslam";
+inline constexpr const char* kSchemaEncodingOmgIdl = "omgidl";
+inline constexpr const char* kMessageEncodingCdr = "cdr";
+inline constexpr const char* kMetadataRobot = "robot";            // robot id
+inline constexpr const char* kMetadataQos = "qos";                // QoS preset name
+inline constexpr const char* kMetadataDdsVendor = "dds_vendor";   // e.g. "cyclonedds"
+inline constexpr const char* kMetadataDdsTopic = "dds_topic";     // topic name on the wire
+
 // Footer content: summary_start u64, summary_offset_start u64, summary_crc u32.
 inline constexpr std::size_t kFooterContentSize = 20;
 // Message content before the payload: channel u16, sequence u32, log_time u64, publish_time u64.
