@@ -30,6 +30,8 @@ inline constexpr Topic<msg::MotionCommand> kExplorerCommand{"explorer/command", 
 inline constexpr Topic<msg::ExplorerStatus> kExplorerStatus{"explorer/status", QosPreset::kState};
 inline constexpr Topic<msg::MotionFeedback> kMotionFeedback{"robot/motion_feedback", QosPreset::kStream};
 inline constexpr Topic<msg::GroundTruthPose> kGroundTruth{"sim/ground_truth", QosPreset::kStream};
+// The simulator's camera, read by the camera service as its source (like a device).
+inline constexpr Topic<msg::Image> kSimCamera{"sim/camera", QosPreset::kSensor};
 inline constexpr Topic<msg::ServiceStatus> kStatus{"rslam/status", QosPreset::kState};
 }  // namespace topics
 

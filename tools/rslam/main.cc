@@ -1,0 +1,16 @@
+// rslam: the command line. Each subcommand lives with its tool; this file only gathers them.
+
+#include <CLI/CLI.hpp>
+
+#include "tools/eval/eval_command.h"
+#include "tools/launch/launch_command.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"rslam: vision-only SLAM (RatSLAM) and camera-based occupancy mapping as DDS services", "rslam"};
+  app.require_subcommand(1);
+  rslam::launch::RegisterLaunchCommand(app);
+  rslam::launch::RegisterStatusCommand(app);
+  rslam::eval::RegisterEvalCommand(app);
+  CLI11_PARSE(app, argc, argv);
+  return 0;
+}
