@@ -34,6 +34,7 @@ class McapSplitWriter {
   // Rolls over first when the current file already holds messages and is over budget.
   void Write(uint16_t channel_id, uint32_t sequence, uint64_t log_time_ns,
              uint64_t publish_time_ns, std::span<const std::byte> data);
+  void Flush() { writer_.Flush(); }
   void Close();
 
   // Every file started so far, in order.

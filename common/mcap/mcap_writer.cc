@@ -135,6 +135,11 @@ void McapWriter::Write(uint16_t channel_id, uint32_t sequence, uint64_t log_time
   if (chunk_.size() >= static_cast<uint64_t>(options_.chunk_size)) FlushChunk();
 }
 
+void McapWriter::Flush() {
+  if (!is_open()) throw std::logic_error("McapWriter::Flush: no open file");
+  FlushChunk();
+}
+
 void McapWriter::FlushChunk() {
   if (chunk_.empty()) return;
   const uint32_t crc = Crc32(chunk_.data(), chunk_.size());

@@ -76,6 +76,10 @@ class McapWriter {
   void Write(uint16_t channel_id, uint32_t sequence, uint64_t log_time_ns,
              uint64_t publish_time_ns, std::span<const std::byte> data);
 
+  // Closes the open chunk now and hands it to the OS, so a crash cannot lose it. For recorders
+  // of low-rate topics: call it periodically (e.g. every second) to bound what a kill loses.
+  void Flush();
+
   // Flushes the open chunk and writes Data End, summary and footer. Idempotent.
   void Close();
 

@@ -88,6 +88,26 @@ TEST(McapRecovery, CompleteFileRecoversUnchanged) {
   EXPECT_EQ(McapReader((dir / "copy.mcap").string()).statistics().message_count, msgs.size());
 }
 
+TEST(McapRecovery, FlushedChunkSurvivesWithoutClose) {
+  const auto dir = ScratchDir();
+  const auto msgs = MakeMessages(20);  // far less than one 4 MiB chunk
+  std::vector<std::byte> unfinished;
+  {
+    McapWriter w;
+    w.Open(dir / "live.mcap");
+    DeclareChannels(w);
+    WriteAll(w, msgs);
+    w.Flush();
+    w.Write(1, 999, 5, 5, msgs[0].data);  // still in the open chunk when "killed"
+    unfinished = ReadFile(dir / "live.mcap");  // what the OS has now
+  }
+  WriteFile(dir / "killed.mcap", unfinished);
+  const auto report = RecoverMcap(dir / "killed.mcap", dir / "fixed.mcap");
+  EXPECT_EQ(report.messages, msgs.size());
+  EXPECT_EQ(report.chunks, 1u);
+  EXPECT_EQ(report.bytes_dropped, 0u);
+}
+
 TEST(McapRecovery, NotAnMcapFileIsRefused) {
   const auto dir = ScratchDir();
   const std::string junk = "this is not an mcap file at all";
