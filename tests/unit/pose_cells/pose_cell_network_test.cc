@@ -179,6 +179,15 @@ TEST(PoseCellNetwork, PathIntegrationWrapsAroundInXAndY) {
   EXPECT_NEAR(CircularDistance(net.BestPose().x, 10.0, 21), 0.0, 0.5);
 }
 
+TEST(PoseCellNetwork, PathIntegrationWrapsAroundInMinusX) {
+  PoseCellNetwork net(SmallConfig());
+  // Layer 18 faces pi: 15 cells of travel take x from 10 to -5 -> 16.
+  for (int i = 0; i < 10; ++i) net.Step(1.5, 0.0, 1.0);
+  EXPECT_NEAR(CircularDistance(net.BestPose().x, 16.0, 21), 0.0, 0.5);
+  EXPECT_NEAR(CircularDistance(net.BestPose().y, 10.0, 21), 0.0, 0.1);
+  EXPECT_EQ(CountPeaks(net), 1);
+}
+
 TEST(PoseCellNetwork, RotationShiftsThetaAndWrapsAround) {
   PoseCellNetwork net(SmallConfig());
   const double cell = 2 * kPi / 36;
