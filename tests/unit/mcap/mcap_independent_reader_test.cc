@@ -1,6 +1,9 @@
 // Files written by McapWriter read back identically with the official Foxglove readers
 // (@mcap/core indexed + streaming readers, @mcap/support decompression) via read_mcap.mjs.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -35,10 +38,14 @@ std::string RunCommand(const std::string& command, int& status) {
   return out;
 }
 
-// The npm packages, installed once per build tree.
+// The npm packages, installed once per build tree. ctest runs these tests in parallel
+// processes, so the install is serialised with a lock file.
 std::string NodeModulesDir() {
   const std::string prefix = std::string(RSLAM_BINARY_DIR) + "/npm-mcap";
   const std::string modules = prefix + "/node_modules";
+  std::filesystem::create_directories(prefix);
+  const int lock = ::open((prefix + ".lock").c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  if (lock >= 0) ::flock(lock, LOCK_EX);
   const std::vector<std::string> packages = {"@mcap/core", "@mcap/nodejs", "@mcap/support",
                                              "@foxglove/omgidl-parser",
                                              "@foxglove/omgidl-serialization"};
@@ -53,6 +60,7 @@ std::string NodeModulesDir() {
         status);
     if (status != 0) ADD_FAILURE() << "npm install failed:\n" << log;
   }
+  if (lock >= 0) ::close(lock);  // releases the lock
   return modules;
 }
 
