@@ -1,5 +1,8 @@
 #include "services/templates/view_encoding.h"
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
 
 #include <algorithm>
 #include <cmath>
@@ -141,27 +144,31 @@ void ViewEncoder::EncodeGrid(const cv::Mat& crop, EncodedView& out) const {
   // OpenRatSLAM's vt_patch_normalise: z-score over a (2r+1)^2 patch, edges clamped, mapped
   // from [-3, 3] sigma to [0, 1].
   if (config_.patch_normalisation > 0) {
+    // Box sums from integral images of the edge-replicated view (replication = clamped
+    // indices, as OpenRatSLAM clamps): O(1) per pixel whatever the radius.
     const int r = config_.patch_normalisation;
-    const double count = (2.0 * r + 1) * (2.0 * r + 1);
+    const int side = 2 * r + 1;
+    const double count = static_cast<double>(side) * side;
+    cv::Mat padded, sum, sum_sq;
+    cv::copyMakeBorder(view, padded, r, r, r, r, cv::BORDER_REPLICATE);
+    cv::integral(padded, sum, sum_sq, CV_64F, CV_64F);
     cv::Mat normalised(view.size(), CV_32F);
     for (int y = 0; y < height_; ++y) {
+      const double* s0 = sum.ptr<double>(y);
+      const double* s1 = sum.ptr<double>(y + side);
+      const double* q0 = sum_sq.ptr<double>(y);
+      const double* q1 = sum_sq.ptr<double>(y + side);
+      const float* in = view.ptr<float>(y);
+      float* out_row = normalised.ptr<float>(y);
       for (int x = 0; x < width_; ++x) {
-        double sum = 0, sum_sq = 0;
-        for (int py = y - r; py <= y + r; ++py) {
-          const float* row = view.ptr<float>(std::clamp(py, 0, height_ - 1));
-          for (int px = x - r; px <= x + r; ++px) {
-            const double v = row[std::clamp(px, 0, width_ - 1)];
-            sum += v;
-            sum_sq += v * v;
-          }
-        }
-        const double mean = sum / count;
-        const double stddev = std::sqrt(std::max(0.0, sum_sq / count - mean * mean));
-        float& result = normalised.at<float>(y, x);
-        if (stddev <= 1e-9 || stddev < config_.min_patch_normalisation_std) {
-          result = 0.5f;
+        const double box = s1[x + side] - s1[x] - s0[x + side] + s0[x];
+        const double box_sq = q1[x + side] - q1[x] - q0[x + side] + q0[x];
+        const double mean = box / count;
+        const double stddev = std::sqrt(std::max(0.0, box_sq / count - mean * mean));
+        if (stddev <= 1e-6 || stddev < config_.min_patch_normalisation_std) {
+          out_row[x] = 0.5f;
         } else {
-          result = static_cast<float>(((view.at<float>(y, x) - mean) / stddev + 3.0) / 6.0);
+          out_row[x] = static_cast<float>(((in[x] - mean) / stddev + 3.0) / 6.0);
         }
       }
     }
