@@ -8,7 +8,59 @@
 #include <stdexcept>
 #include <string>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace rslam::odometry {
+
+namespace {
+
+// Sum of a[n] (and of b[n]) over n < count.
+void Sums(const float* a, const float* b, int count, float& sum_a, float& sum_b) {
+  int n = 0;
+#if defined(__SSE2__)
+  __m128 va = _mm_setzero_ps(), vb = _mm_setzero_ps();
+  for (; n + 4 <= count; n += 4) {
+    va = _mm_add_ps(va, _mm_loadu_ps(a + n));
+    vb = _mm_add_ps(vb, _mm_loadu_ps(b + n));
+  }
+  alignas(16) float lanes_a[4], lanes_b[4];
+  _mm_store_ps(lanes_a, va);
+  _mm_store_ps(lanes_b, vb);
+  sum_a = (lanes_a[0] + lanes_a[1]) + (lanes_a[2] + lanes_a[3]);
+  sum_b = (lanes_b[0] + lanes_b[1]) + (lanes_b[2] + lanes_b[3]);
+#else
+  sum_a = sum_b = 0.0f;
+#endif
+  for (; n < count; ++n) {
+    sum_a += a[n];
+    sum_b += b[n];
+  }
+}
+
+// Sum of |a[n] - gain * b[n]| over n < count. SIMD by hand: the compiler may not reorder a
+// floating-point reduction on its own.
+float AbsoluteDifferenceSum(const float* a, const float* b, float gain, int count) {
+  int n = 0;
+  float sum = 0.0f;
+#if defined(__SSE2__)
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  const __m128 g = _mm_set1_ps(gain);
+  __m128 acc = _mm_setzero_ps();
+  for (; n + 4 <= count; n += 4) {
+    const __m128 d = _mm_sub_ps(_mm_loadu_ps(a + n), _mm_mul_ps(g, _mm_loadu_ps(b + n)));
+    acc = _mm_add_ps(acc, _mm_andnot_ps(sign, d));
+  }
+  alignas(16) float lanes[4];
+  _mm_store_ps(lanes, acc);
+  sum = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+#endif
+  for (; n < count; ++n) sum += std::abs(a[n] - gain * b[n]);
+  return sum;
+}
+
+}  // namespace
 
 double ShiftedProfileDifference(std::span<const float> current, std::span<const float> previous, int shift,
                                 bool match_gain) {
@@ -21,16 +73,11 @@ double ShiftedProfileDifference(std::span<const float> current, std::span<const 
   float gain = 1.0f;
   if (match_gain) {
     float sum_a = 0.0f, sum_b = 0.0f;
-    for (int n = 0; n < overlap; ++n) {
-      sum_a += a[n];
-      sum_b += b[n];
-    }
+    Sums(a, b, overlap, sum_a, sum_b);
     // A black overlap has no exposure to match.
     if (sum_b > 1e-6f && sum_a > 1e-6f) gain = sum_a / sum_b;
   }
-  float sum = 0.0f;
-  for (int n = 0; n < overlap; ++n) sum += std::abs(a[n] - gain * b[n]);
-  return static_cast<double>(sum) / overlap;
+  return static_cast<double>(AbsoluteDifferenceSum(a, b, gain, overlap)) / overlap;
 }
 
 ProfileMatch BestProfileShift(std::span<const float> current, std::span<const float> previous, int max_shift,
