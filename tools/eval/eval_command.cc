@@ -48,12 +48,15 @@ struct TrajectoryCommandOptions {
   bool json = false;
 };
 
-[[noreturn]] void Fail(const std::string& command, const std::string& reason) {
-  throw CLI::RuntimeError("rslam eval " + command + ": " + reason, 1);
+// CLI11 exits silently on RuntimeError, so the reason is printed here first.
+[[noreturn]] void Fail(std::ostream& err, const std::string& command, const std::string& reason) {
+  const std::string message = "rslam eval " + command + ": " + reason;
+  err << message << "\n";
+  throw CLI::RuntimeError(message, 1);
 }
 
 // A preset name -> its file: $RSLAM_PRESET_DIR, ./deploy/presets, then the source tree's.
-std::filesystem::path FindPreset(const std::string& name) {
+std::filesystem::path FindPreset(const std::string& name, std::ostream& err) {
   std::vector<std::filesystem::path> folders;
   if (const char* env = std::getenv("RSLAM_PRESET_DIR")) folders.emplace_back(env);
   folders.emplace_back("deploy/presets");
@@ -66,14 +69,14 @@ std::filesystem::path FindPreset(const std::string& name) {
     if (std::filesystem::is_regular_file(candidate)) return candidate;
     tried += (tried.empty() ? "" : ", ") + candidate.string();
   }
-  Fail("vpr", "no preset '" + name + "' (looked for " + tried + ")");
+  Fail(err, "vpr", "no preset '" + name + "' (looked for " + tried + ")");
 }
 
-void RunVpr(const VprCommandOptions& options, std::ostream& out) {
+void RunVpr(const VprCommandOptions& options, std::ostream& out, std::ostream& err) {
+  std::string preset_source;
   try {
     YAML::Node preset;
-    std::string preset_source;
-    if (!options.preset.empty()) preset_source = FindPreset(options.preset).string();
+    if (!options.preset.empty()) preset_source = FindPreset(options.preset, err).string();
     if (!options.config_file.empty()) preset_source = options.config_file;
     if (!preset_source.empty()) preset = LoadYamlFile(preset_source);
 
@@ -119,13 +122,13 @@ void RunVpr(const VprCommandOptions& options, std::ostream& out) {
   } catch (const CLI::Error&) {
     throw;
   } catch (const ConfigError& e) {
-    Fail("vpr", std::string("bad config: ") + e.what());
+    Fail(err, "vpr", "bad config " + preset_source + ": " + e.what());
   } catch (const std::exception& e) {
-    Fail("vpr", e.what());
+    Fail(err, "vpr", e.what());
   }
 }
 
-void RunTrajectory(const TrajectoryCommandOptions& options, std::ostream& out) {
+void RunTrajectory(const TrajectoryCommandOptions& options, std::ostream& out, std::ostream& err) {
   try {
     const std::vector<StampedPose2D> estimate = ReadTrajectoryCsvFile(options.estimate_file);
     const std::vector<StampedPose2D> truth = ReadTrajectoryCsvFile(options.truth_file);
@@ -157,13 +160,13 @@ void RunTrajectory(const TrajectoryCommandOptions& options, std::ostream& out) {
   } catch (const CLI::Error&) {
     throw;
   } catch (const std::exception& e) {
-    Fail("trajectory", e.what());
+    Fail(err, "trajectory", e.what());
   }
 }
 
 }  // namespace
 
-void RegisterEvalCommand(CLI::App& rslam, std::ostream& out) {
+void RegisterEvalCommand(CLI::App& rslam, std::ostream& out, std::ostream& err) {
   CLI::App* eval = rslam.add_subcommand("eval", "Evaluate place recognition and trajectories");
   eval->require_subcommand(1);
 
@@ -175,11 +178,11 @@ void RegisterEvalCommand(CLI::App& rslam, std::ostream& out) {
   vpr->add_option("--query", vpr_options->query_dir, "Folder of query images, same file names")->required();
   vpr->add_option("--tolerance", vpr_options->tolerance, "Frames from the true place that still count as correct")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0, 1000000));
   vpr->add_option("--sequence", vpr_options->sequence_length,
                   "Sequence length L for SeqSLAM-style matching; 1 = single frame")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000000));
   vpr->add_option("--contrast-window", vpr_options->contrast_window,
                   "Local contrast enhancement window in references (0 off; default 0 single frame, 10 sequence)")
       ->check(CLI::Range(0, 100000));
@@ -194,7 +197,7 @@ void RegisterEvalCommand(CLI::App& rslam, std::ostream& out) {
   vpr->add_option("--limit", vpr_options->limit, "Use only the first N frames of each set (0 = all)")
       ->capture_default_str();
   vpr->add_flag("--json", vpr_options->json, "Print the result as one JSON object");
-  vpr->callback([vpr_options, &out] { RunVpr(*vpr_options, out); });
+  vpr->callback([vpr_options, &out, &err] { RunVpr(*vpr_options, out, err); });
 
   auto trajectory_options = std::make_shared<TrajectoryCommandOptions>();
   CLI::App* trajectory = eval->add_subcommand(
@@ -205,11 +208,11 @@ void RegisterEvalCommand(CLI::App& rslam, std::ostream& out) {
   trajectory->add_option("--max-stamp-gap-ms", trajectory_options->max_stamp_gap_ms,
                          "Largest stamp difference for associating poses (0 = exact stamps)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(CLI::Range(0.0, 1e9));
   trajectory->add_flag("--json", trajectory_options->json, "Print the result as one JSON object");
-  trajectory->callback([trajectory_options, &out] { RunTrajectory(*trajectory_options, out); });
+  trajectory->callback([trajectory_options, &out, &err] { RunTrajectory(*trajectory_options, out, err); });
 }
 
-void RegisterEvalCommand(CLI::App& rslam) { RegisterEvalCommand(rslam, std::cout); }
+void RegisterEvalCommand(CLI::App& rslam) { RegisterEvalCommand(rslam, std::cout, std::cerr); }
 
 }  // namespace rslam::eval

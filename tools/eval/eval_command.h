@@ -11,7 +11,8 @@
 //     Absolute trajectory error after similarity alignment (trajectory_alignment.h); CSV format
 //     in trajectory_csv.h (stamp_ns,x,y[,theta]).
 //
-// Failures (unreadable input, bad config) throw CLI::RuntimeError with the reason, exit code 1.
+// Failures (unreadable input, bad config) print the reason to err and throw CLI::RuntimeError
+// (exit code 1; CLI11's exit() prints nothing for it).
 
 #include <CLI/CLI.hpp>
 
@@ -19,9 +20,10 @@
 
 namespace rslam::eval {
 
-// Adds `eval` with subcommands `vpr` and `trajectory` to the rslam app; results go to out.
-void RegisterEvalCommand(CLI::App& rslam, std::ostream& out);
-// Results go to std::cout.
+// Adds `eval` with subcommands `vpr` and `trajectory` to the rslam app; results go to out,
+// failure reasons to err. Both streams must outlive the app.
+void RegisterEvalCommand(CLI::App& rslam, std::ostream& out, std::ostream& err);
+// Results go to std::cout, failures to std::cerr.
 void RegisterEvalCommand(CLI::App& rslam);
 
 }  // namespace rslam::eval

@@ -20,9 +20,9 @@ using testing::WriteText;
 
 // Runs `rslam <args>` with only the eval command; returns what it printed.
 std::string RunRslam(std::vector<std::string> args) {
-  std::ostringstream out;
+  std::ostringstream out, err;
   CLI::App app{"rslam"};
-  RegisterEvalCommand(app, out);
+  RegisterEvalCommand(app, out, err);
   std::reverse(args.begin(), args.end());  // CLI11 takes the arguments last-first
   app.parse(args);
   return out.str();
