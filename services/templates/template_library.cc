@@ -68,50 +68,64 @@ TemplateConfig Validated(TemplateConfig config) {
 
 }  // namespace
 
-TemplateLibrary::TemplateLibrary(TemplateConfig config)
-    : config_(Validated(std::move(config))),
-      encoder_(config_),
-      histogram_mode_(config_.mode == "histogram"),
-      column_mode_(config_.mode == "column"),
-      width_(encoder_.width()),
-      height_(encoder_.height()),
-      template_size_(width_ * height_) {
-  if (histogram_mode_) {
-    dead_column_.assign(width_, 0);
-    for (int c : config_.dead_zone_columns) dead_column_[c] = 1;
-  } else if (config_.panoramic) {
-    for (int m = 0; m <= width_ / 2; m += config_.step_match) {
-      shifts_.push_back(m);
-      if (m != 0 && width_ - m != m) shifts_.push_back(-m);
+std::vector<TemplateLibrary::ShiftWindow> TemplateLibrary::MakeShiftWindows(const TemplateConfig& config, int width,
+                                                                           int height) {
+  std::vector<ShiftWindow> windows;
+  if (config.mode == "histogram") return windows;
+  // Smallest |s| first, so equal differences prefer no rotation.
+  std::vector<int> shifts;
+  if (config.panoramic) {
+    for (int m = 0; m <= width / 2; m += config.step_match) {
+      shifts.push_back(m);
+      if (m != 0 && width - m != m) shifts.push_back(-m);
     }
   } else {
-    for (int m = 0; m <= config_.shift_match; m += config_.step_match) {
-      shifts_.push_back(m);
-      if (m != 0) shifts_.push_back(-m);
+    for (int m = 0; m <= config.shift_match; m += config.step_match) {
+      shifts.push_back(m);
+      if (m != 0) shifts.push_back(-m);
     }
   }
   // Template columns [template_x0, template_x0 + length) are compared with view columns
   // shifted by s: the view's pixel at x + s against the template's at x.
-  for (int s : shifts_) {
+  for (int s : shifts) {
     ShiftWindow w;
     w.shift = s;
-    if (config_.panoramic) {  // the view's rows are doubled, so a wrapped window is contiguous
+    if (config.panoramic) {  // the view's rows are doubled, so a wrapped window is contiguous
       w.template_x0 = 0;
-      w.view_x0 = ((s % width_) + width_) % width_;
-      w.length = width_;
-    } else if (column_mode_) {  // paper 000 eq. 8: the whole w - |s| overlap
+      w.view_x0 = ((s % width) + width) % width;
+      w.length = width;
+    } else if (config.mode == "column") {  // paper 000 eq. 8: the whole w - |s| overlap
       w.template_x0 = std::max(0, -s);
       w.view_x0 = w.template_x0 + s;
-      w.length = width_ - std::abs(s);
+      w.length = width - std::abs(s);
     } else {  // OpenRatSLAM: the view's centre window, a constant w - 2 * shift_match columns
-      w.template_x0 = config_.shift_match;
+      w.template_x0 = config.shift_match;
       w.view_x0 = w.template_x0 + s;
-      w.length = width_ - 2 * config_.shift_match;
+      w.length = width - 2 * config.shift_match;
     }
-    w.sad_per_difference = 255.0 * w.length * height_;
-    windows_.push_back(w);
+    w.sad_per_difference = 255.0 * w.length * height;
+    windows.push_back(w);
   }
+  return windows;
 }
+
+std::vector<uint8_t> TemplateLibrary::MakeDeadColumns(const TemplateConfig& config, int width) {
+  std::vector<uint8_t> dead(width, 0);
+  if (config.mode == "histogram") {
+    for (int c : config.dead_zone_columns) dead[c] = 1;
+  }
+  return dead;
+}
+
+TemplateLibrary::TemplateLibrary(TemplateConfig config)
+    : config_(Validated(std::move(config))),
+      encoder_(config_),
+      histogram_mode_(config_.mode == "histogram"),
+      width_(encoder_.width()),
+      height_(encoder_.height()),
+      template_size_(width_ * height_),
+      windows_(MakeShiftWindows(config_, width_, height_)),
+      dead_column_(MakeDeadColumns(config_, width_)) {}
 
 namespace {
 

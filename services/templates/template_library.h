@@ -111,7 +111,6 @@ class TemplateLibrary {
   const TemplateConfig config_;
   const ViewEncoder encoder_;
   const bool histogram_mode_;
-  const bool column_mode_;
   const int width_;
   const int height_;
   const int template_size_;
@@ -122,9 +121,10 @@ class TemplateLibrary {
     int length;
     double sad_per_difference;  // 255 * pixels compared
   };
-  std::vector<int> shifts_;                 // tried in this order (smallest |s| first)
-  std::vector<ShiftWindow> windows_;        // one per shift (column, patch)
-  std::vector<uint8_t> dead_column_;        // histogram mode: 1 where the dead zone is
+  static std::vector<ShiftWindow> MakeShiftWindows(const TemplateConfig& config, int width, int height);
+  static std::vector<uint8_t> MakeDeadColumns(const TemplateConfig& config, int width);
+  const std::vector<ShiftWindow> windows_;  // one per shift tried, smallest |s| first (column, patch)
+  const std::vector<uint8_t> dead_column_;  // histogram mode: 1 where the dead zone is
 
   std::vector<uint8_t> pixels_;             // size() * template_size_
   std::vector<float> means_;                // per template
