@@ -6,12 +6,21 @@ namespace {
 cv::Vec3b ToColour(const std::vector<int>& bgr) {
   return cv::Vec3b(static_cast<uchar>(bgr.at(0)), static_cast<uchar>(bgr.at(1)), static_cast<uchar>(bgr.at(2)));
 }
+
+template <class T>
+void ValidateNested(const T& cfg, const std::string& prefix) {
+  try {
+    cfg.Validate();
+  } catch (const ConfigError& e) {
+    throw ConfigError(prefix + "." + e.key(), e.reason());
+  }
+}
 }  // namespace
 
 void ObstacleProfileConfig::Validate() const {
-  camera.Validate();
-  floor.Validate();
-  profile.Validate();
+  ValidateNested(camera, "camera");
+  ValidateNested(floor, "floor");
+  ValidateNested(profile, "profile");
   Require(floor_colour_bgr.size() == 3, "floor_colour_bgr", "needs 3 values (B, G, R)");
   for (int c : floor_colour_bgr) Require(c >= 0 && c <= 255, "floor_colour_bgr", "each must be 0..255");
 }

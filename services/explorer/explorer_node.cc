@@ -1,0 +1,380 @@
+#include "services/explorer/explorer_node.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "common/persistence/state_file.h"
+#include "services/explorer/exploration_planner.h"
+#include "services/explorer/proto/explorer_node_state.pb.h"
+
+namespace rslam::explorer {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr const char* kStateKind = "rslam.explorer.ExplorerNodeState";
+constexpr uint32_t kStateVersion = 1;
+constexpr int kMaxReplansPerStep = 8;  // look-before-you-move failures in a row before waiting for a grid
+
+// Why a grid cannot be used, or "" when it can.
+std::string GridProblem(const msg::OccupancyGrid& g, int64_t max_cells) {
+  if (g.width == 0 || g.height == 0) return "grid has no cells";
+  const uint64_t cells = uint64_t{g.width} * g.height;
+  if (cells > static_cast<uint64_t>(max_cells))
+    return "grid of " + std::to_string(cells) + " cells is larger than max_grid_cells";
+  if (g.cells.size() != cells)
+    return "grid holds " + std::to_string(g.cells.size()) + " cells, width x height is " + std::to_string(cells);
+  if (!std::isfinite(g.resolution_m) || g.resolution_m <= 0) return "grid resolution is not positive";
+  if (!std::isfinite(g.origin_x_m) || !std::isfinite(g.origin_y_m)) return "grid origin is not finite";
+  for (int8_t c : g.cells)
+    if (c < -1 || c > 100) return "grid cell value " + std::to_string(c) + " is outside -1..100";
+  return "";
+}
+
+msg::MotionKind ToMessageKind(MotionCommand::Kind kind) {
+  switch (kind) {
+    case MotionCommand::Kind::kRotate: return msg::MotionKind::MOTION_ROTATE;
+    case MotionCommand::Kind::kMove: return msg::MotionKind::MOTION_MOVE;
+    case MotionCommand::Kind::kPirouette: return msg::MotionKind::MOTION_PIROUETTE;
+    case MotionCommand::Kind::kStop: return msg::MotionKind::MOTION_STOP;
+  }
+  return msg::MotionKind::MOTION_STOP;
+}
+
+// The pose after a command that completed as planned.
+Pose2D Apply(const Pose2D& p, const MotionCommand& c) {
+  switch (c.kind) {
+    case MotionCommand::Kind::kRotate: return {p.x, p.y, std::remainder(p.theta + c.angle_rad, 2 * M_PI)};
+    case MotionCommand::Kind::kMove:
+      return {p.x + c.distance_m * std::cos(p.theta), p.y + c.distance_m * std::sin(p.theta), p.theta};
+    default: return p;
+  }
+}
+
+bool SameStatus(const msg::ExplorerStatus& a, const msg::ExplorerStatus& b) {
+  return a.state == b.state && a.goal_x_m == b.goal_x_m && a.goal_y_m == b.goal_y_m &&
+         a.commands_sent == b.commands_sent && a.goals_set_aside == b.goals_set_aside && a.reason == b.reason;
+}
+
+}  // namespace
+
+class ExplorerNode::Controller {
+ public:
+  Controller(ServiceContext& context, const Config& config)
+      : context_(context), config_(config), planner_(config.planner), last_save_(Clock::now()) {
+    LoadState();
+    command_pub_ = context_.Advertise(bus::topics::kExplorerCommand);
+    status_pub_ = context_.Advertise(bus::topics::kExplorerStatus);
+    std::lock_guard lock(mutex_);
+    PublishStatusIfChanged(/*force=*/true);
+  }
+
+  // The callbacks share the controller; the context keeps its subscribers (and so the
+  // controller) alive until after the node is gone, and Stop() makes late callbacks return.
+  static void Subscribe(const std::shared_ptr<Controller>& self) {
+    ServiceContext& ctx = self->context_;
+    ctx.Subscribe<msg::OccupancyGrid>(bus::topics::kOccupancyGrid,
+                                      [self](const msg::OccupancyGrid& m) { self->OnGrid(m); });
+    ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose,
+                                       [self](const msg::ExperiencePose& m) { self->OnPose(m); });
+    ctx.Subscribe<msg::MotionFeedback>(bus::topics::kMotionFeedback,
+                                       [self](const msg::MotionFeedback& m) { self->OnFeedback(m); });
+  }
+
+  void Stop() {
+    {
+      std::lock_guard lock(mutex_);
+      stopped_ = true;
+    }
+    SaveState();
+  }
+
+  void Tick() {
+    {
+      std::lock_guard lock(mutex_);
+      if (stopped_) return;
+      const auto now = Clock::now();
+      if (awaiting_ && now - awaiting_->last_heard > Seconds(config_.feedback_timeout_s)) {
+        reason_ = "no feedback for command " + std::to_string(awaiting_->seq) + " within " +
+                  std::to_string(config_.feedback_timeout_s) + " s: planning again";
+        spdlog::warn("{}", reason_);
+        awaiting_.reset();
+        plan_.reset();
+        Step();
+      }
+      if (fresh_grid_needed_ && now - fresh_grid_since_ > Seconds(config_.fresh_grid_timeout_s)) {
+        fresh_grid_needed_ = false;
+        Step();
+      }
+    }
+    if (Clock::now() - last_save_ >= Seconds(context_.runtime().state_save_period_s)) {
+      last_save_ = Clock::now();
+      SaveState();
+    }
+  }
+
+ private:
+  struct Outstanding {
+    uint64_t seq = 0;
+    MotionCommand command;
+    Clock::time_point last_heard;
+  };
+
+  static Clock::duration Seconds(double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  }
+
+  void OnGrid(const msg::OccupancyGrid& grid) {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    if (const std::string problem = GridProblem(grid, config_.max_grid_cells); !problem.empty()) {
+      context_.Reject("grid", problem);
+      return;
+    }
+    grid_ = grid;
+    fresh_grid_needed_ = false;
+    Step();
+  }
+
+  void OnPose(const msg::ExperiencePose& pose) {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    if (!std::isfinite(pose.x_m) || !std::isfinite(pose.y_m) || !std::isfinite(pose.theta_rad)) {
+      context_.Reject("pose", "robot pose has a non-finite number");
+      return;
+    }
+    const bool first = !pose_;
+    pose_ = pose;
+    context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
+    if (first) Step();
+  }
+
+  void OnFeedback(const msg::MotionFeedback& feedback) {
+    std::lock_guard lock(mutex_);
+    if (stopped_ || !awaiting_ || feedback.command_seq != awaiting_->seq) return;  // not ours or old
+    switch (feedback.state) {
+      case msg::MotionState::MOTION_EXECUTING:
+        awaiting_->last_heard = Clock::now();
+        return;
+      case msg::MotionState::MOTION_DONE: {
+        const MotionCommand done = awaiting_->command;
+        awaiting_.reset();
+        expected_pose_ = Apply(expected_pose_, done);
+        ++next_command_;
+        if (done.kind == MotionCommand::Kind::kPirouette) {
+          if (pose_) planner_.RecordPirouette(RobotPose());
+          WaitForFreshGrid();
+        }
+        Step();
+        return;
+      }
+      case msg::MotionState::MOTION_BLOCKED:
+        awaiting_.reset();
+        if (plan_) planner_.ReportBlocked(*plan_);
+        plan_.reset();
+        reason_ = "the base reported command " + std::to_string(feedback.command_seq) + " blocked";
+        NoteSetAside();
+        WaitForFreshGrid();
+        Step();
+        return;
+    }
+    context_.Reject("feedback", "unknown motion state " + std::to_string(static_cast<int>(feedback.state)));
+  }
+
+  void WaitForFreshGrid() {
+    fresh_grid_needed_ = true;
+    fresh_grid_since_ = Clock::now();
+  }
+
+  Pose2D RobotPose() const { return {pose_->x_m, pose_->y_m, pose_->theta_rad}; }
+
+  GridView View() const {
+    GridView view;
+    view.width = static_cast<int>(grid_->width);
+    view.height = static_cast<int>(grid_->height);
+    view.resolution_m = grid_->resolution_m;
+    view.origin_x_m = grid_->origin_x_m;
+    view.origin_y_m = grid_->origin_y_m;
+    view.cells = grid_->cells;
+    view.free_max_percent = config_.free_max_percent;
+    view.occupied_min_percent = config_.occupied_min_percent;
+    return view;
+  }
+
+  // Decides and sends the next command when none is outstanding. Called with the mutex held.
+  void Step() {
+    if (stopped_ || state_ == msg::ExplorationState::EXPLORATION_COMPLETE || awaiting_) return;
+    if (!grid_ || !pose_ || fresh_grid_needed_) {
+      PublishStatusIfChanged();
+      return;
+    }
+    const GridView view = View();
+    for (int attempt = 0; attempt < kMaxReplansPerStep; ++attempt) {
+      if (!plan_ || next_command_ >= plan_->commands.size()) {
+        try {
+          plan_ = planner_.PlanFrom(view, RobotPose());
+        } catch (const std::invalid_argument& e) {
+          plan_.reset();
+          reason_ = std::string("cannot plan: ") + e.what();
+          PublishStatusIfChanged();
+          return;
+        }
+        next_command_ = 0;
+        expected_pose_ = RobotPose();
+        NoteSetAside();
+        if (plan_->complete) {
+          Complete(plan_->reason);
+          return;
+        }
+        state_ = msg::ExplorationState::EXPLORATION_EXPLORING;
+        if (plan_->goal_x >= 0) {
+          const double cell = grid_->resolution_m * config_.planner.coarse_cell_factor;
+          goal_x_m_ = grid_->origin_x_m + (plan_->goal_x + 0.5) * cell;
+          goal_y_m_ = grid_->origin_y_m + (plan_->goal_y + 0.5) * cell;
+        }
+        spdlog::info("plan: {} ({} commands) towards ({:.2f}, {:.2f})", plan_->reason, plan_->commands.size(),
+                     goal_x_m_, goal_y_m_);
+      }
+      const MotionCommand& command = plan_->commands[next_command_];
+      if (command.kind == MotionCommand::Kind::kMove &&
+          !planner_.IsPathClear(view, expected_pose_, command.distance_m)) {
+        // Look before you move: the latest grid shows an obstacle on the way.
+        planner_.ReportBlocked(*plan_);
+        plan_.reset();
+        reason_ = "look before you move: the path ahead is blocked, planning again";
+        NoteSetAside();
+        continue;
+      }
+      Send(command);
+      PublishStatusIfChanged();
+      return;
+    }
+    reason_ = "every plan was blocked; waiting for a new grid";
+    WaitForFreshGrid();
+    PublishStatusIfChanged();
+  }
+
+  void Send(const MotionCommand& command) {
+    msg::MotionCommand out;
+    if (pose_) out.header = pose_->header;
+    out.header.robot_id = context_.robot_id();
+    out.command_seq = ++command_seq_;
+    out.kind = ToMessageKind(command.kind);
+    out.angle_rad = command.angle_rad;  // kPirouette: one of its turns
+    out.distance_m = command.distance_m;
+    command_pub_->Publish(out);
+    ++commands_sent_;
+    dirty_ = true;
+    if (command.kind != MotionCommand::Kind::kStop) awaiting_ = Outstanding{out.command_seq, command, Clock::now()};
+  }
+
+  void Complete(const std::string& reason) {
+    Send({MotionCommand::Kind::kStop});
+    state_ = msg::ExplorationState::EXPLORATION_COMPLETE;
+    reason_ = reason;
+    plan_.reset();
+    spdlog::info("exploration complete: {}", reason);
+    PublishStatusIfChanged();
+  }
+
+  // Logs every goal the planner has newly set aside, with its reason.
+  void NoteSetAside() {
+    const auto& goals = planner_.set_aside_goals();
+    for (; logged_set_aside_ < goals.size(); ++logged_set_aside_) {
+      const SetAsideGoal& g = goals[logged_set_aside_];
+      spdlog::warn("set aside goal cell ({}, {}): {}", g.x, g.y, g.reason);
+      reason_ = "set aside goal cell (" + std::to_string(g.x) + ", " + std::to_string(g.y) + "): " + g.reason;
+      dirty_ = true;
+    }
+  }
+
+  void PublishStatusIfChanged(bool force = false) {
+    msg::ExplorerStatus status;
+    if (pose_) status.header = pose_->header;
+    status.header.robot_id = context_.robot_id();
+    status.state = state_;
+    status.goal_x_m = goal_x_m_;
+    status.goal_y_m = goal_y_m_;
+    status.commands_sent = commands_sent_;
+    status.goals_set_aside = static_cast<uint32_t>(planner_.set_aside_goals().size());
+    status.reason = reason_;
+    if (!force && last_status_ && SameStatus(*last_status_, status)) return;
+    status_pub_->Publish(status);
+    last_status_ = status;
+  }
+
+  void LoadState() {
+    const std::string path = context_.StateFilePath();
+    if (path.empty() || context_.runtime().fresh || !std::filesystem::exists(path)) return;
+    proto::ExplorerNodeState state;
+    ReadStateFile(path, kStateKind, kStateVersion, state);  // throws StateFileError when corrupt
+    planner_.LoadProto(state.planner());                     // validates the whole message
+    command_seq_ = state.last_command_seq();
+    logged_set_aside_ = planner_.set_aside_goals().size();
+    spdlog::info("loaded explorer state from {}: {} goals set aside, last command {}", path, logged_set_aside_,
+                 command_seq_);
+  }
+
+  void SaveState() {
+    const std::string path = context_.StateFilePath();
+    if (path.empty()) return;
+    proto::ExplorerNodeState state;
+    {
+      std::lock_guard lock(mutex_);
+      if (!dirty_) return;
+      *state.mutable_planner() = planner_.ToProto();
+      state.set_last_command_seq(command_seq_);
+      dirty_ = false;
+    }
+    try {
+      WriteStateFile(path, kStateKind, kStateVersion, state);
+    } catch (const std::exception& e) {
+      spdlog::error("could not save state: {}", e.what());
+    }
+  }
+
+  ServiceContext& context_;
+  const Config config_;
+  std::shared_ptr<bus::Publisher<msg::MotionCommand>> command_pub_;
+  std::shared_ptr<bus::Publisher<msg::ExplorerStatus>> status_pub_;
+  Clock::time_point last_save_;
+
+  std::mutex mutex_;
+  bool stopped_ = false;
+  bool dirty_ = true;
+  ExplorationPlanner planner_;
+  std::optional<msg::OccupancyGrid> grid_;
+  std::optional<msg::ExperiencePose> pose_;
+  std::optional<Plan> plan_;
+  size_t next_command_ = 0;
+  Pose2D expected_pose_;  // where the robot should be if the plan's commands so far went as planned
+  std::optional<Outstanding> awaiting_;
+  bool fresh_grid_needed_ = false;
+  Clock::time_point fresh_grid_since_;
+  uint64_t command_seq_ = 0;
+  uint32_t commands_sent_ = 0;
+  size_t logged_set_aside_ = 0;
+  msg::ExplorationState state_ = msg::ExplorationState::EXPLORATION_WAITING;
+  double goal_x_m_ = 0.0, goal_y_m_ = 0.0;
+  std::string reason_ = "waiting for a grid and a pose";
+  std::optional<msg::ExplorerStatus> last_status_;
+};
+
+ExplorerNode::ExplorerNode(ServiceContext& context, const Config& config)
+    : controller_(std::make_shared<Controller>(context, config)) {
+  Controller::Subscribe(controller_);
+}
+
+ExplorerNode::~ExplorerNode() { controller_->Stop(); }
+
+void ExplorerNode::Tick() { controller_->Tick(); }
+
+}  // namespace rslam::explorer

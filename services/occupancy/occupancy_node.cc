@@ -1,0 +1,296 @@
+#include "services/occupancy/occupancy_node.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#include "common/persistence/state_file.h"
+#include "services/occupancy/anchored_profile_map.h"
+#include "services/occupancy/frame_joiner.h"
+#include "services/occupancy/grid_export.h"
+#include "services/occupancy/obstacle_profile_pipeline.h"
+
+namespace rslam::occupancy {
+
+namespace {
+
+constexpr const char* kStateKind = "rslam.occupancy.OccupancyState";
+constexpr uint32_t kStateVersion = 1;
+
+// Why an image cannot be used, or "" when it can.
+std::string ImageProblem(const msg::Image& image, const CameraConfig& camera) {
+  int channels = 0;
+  if (image.encoding == "bgr8") channels = 3;
+  else if (image.encoding == "mono8") channels = 1;
+  else return "unknown encoding '" + image.encoding.substr(0, 32) + "' (bgr8 or mono8)";
+  if (image.width != static_cast<uint32_t>(camera.width) || image.height != static_cast<uint32_t>(camera.height))
+    return "image is " + std::to_string(image.width) + "x" + std::to_string(image.height) + ", the camera is " +
+           std::to_string(camera.width) + "x" + std::to_string(camera.height);
+  if (uint64_t{image.step} < uint64_t{image.width} * channels)
+    return "step " + std::to_string(image.step) + " is shorter than a row";
+  if (uint64_t{image.step} * image.height != image.data.size())
+    return "data holds " + std::to_string(image.data.size()) + " bytes, step x height is " +
+           std::to_string(uint64_t{image.step} * image.height);
+  return "";
+}
+
+bool IsFinitePose(const msg::ExperiencePose& p) {
+  return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad) &&
+         std::isfinite(p.experience_x_m) && std::isfinite(p.experience_y_m) && std::isfinite(p.experience_theta_rad);
+}
+
+msg::ObstacleProfile ToMessage(const msg::Header& header, const AnchoredProfile& anchored, float max_range_m) {
+  msg::ObstacleProfile out;
+  out.header = header;
+  out.experience_id = static_cast<uint32_t>(anchored.experience_id);
+  out.offset_x_m = anchored.offset.x;
+  out.offset_y_m = anchored.offset.y;
+  out.offset_theta_rad = anchored.offset.theta;
+  const RadialObstacleProfile& rop = anchored.profile;
+  out.bearing_min_rad = static_cast<float>(rop.bins.empty() ? rop.first_bearing_rad : rop.BinCentre(0));
+  out.bearing_step_rad = static_cast<float>(rop.bin_width_rad);
+  out.max_range_m = max_range_m;
+  out.ranges_m.reserve(rop.bins.size());
+  for (const RopBin& bin : rop.bins) {
+    switch (bin.status) {
+      case BinStatus::kObstacle: out.ranges_m.push_back(bin.range_m); break;
+      case BinStatus::kBlind: out.ranges_m.push_back(0.0f); break;  // something closer than we can see
+      default: out.ranges_m.push_back(max_range_m); break;          // no obstacle seen
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+class OccupancyNode::Mapper {
+ public:
+  Mapper(ServiceContext& context, const Config& config)
+      : context_(context),
+        config_(config),
+        pipeline_(config.pipeline),
+        map_(config.grid, config.sensor),
+        joiner_(static_cast<size_t>(config.join_buffer_frames)),
+        last_save_(std::chrono::steady_clock::now()) {
+    LoadState();
+    profile_pub_ = context_.Advertise(bus::topics::kOccupancyProfile);
+    grid_pub_ = context_.Advertise(bus::topics::kOccupancyGrid);
+  }
+
+  // Subscriptions are made once the mapper is owned by a shared_ptr. The callbacks share it: the
+  // context keeps its subscribers (and so the mapper) alive until it is destroyed itself, after
+  // the node, and Stop() makes late callbacks return at once.
+  static void Subscribe(const std::shared_ptr<Mapper>& self) {
+    ServiceContext& ctx = self->context_;
+    ctx.Subscribe<msg::Image>(bus::topics::kCameraImage, [self](const msg::Image& m) { self->OnImage(m); });
+    ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose,
+                                       [self](const msg::ExperiencePose& m) { self->OnPose(m); });
+    ctx.Subscribe<msg::ExperienceMap>(bus::topics::kExperienceMapMap,
+                                      [self](const msg::ExperienceMap& m) { self->OnMap(m); });
+  }
+
+  // Stops processing, then saves the state and exports the grid.
+  void Stop() {
+    {
+      std::lock_guard lock(mutex_);
+      stopped_ = true;
+    }
+    SaveState();
+    ExportMaps();
+  }
+
+  void Tick() {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_save_ < std::chrono::duration<double>(context_.runtime().state_save_period_s)) return;
+    last_save_ = now;
+    SaveState();
+  }
+
+ private:
+  void OnImage(const msg::Image& image) {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    if (const std::string problem = ImageProblem(image, config_.pipeline.camera); !problem.empty()) {
+      context_.Reject("image", problem);
+      return;
+    }
+    auto joined = joiner_.AddA(image.header.frame_seq, image);
+    CountDropped();
+    if (joined) ProcessFrame(joined->a, joined->b);
+  }
+
+  void OnPose(const msg::ExperiencePose& pose) {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    if (!IsFinitePose(pose)) {
+      context_.Reject("pose", "experience pose has a non-finite number");
+      return;
+    }
+    latest_map_version_ = std::max(latest_map_version_, pose.map_version);
+    auto joined = joiner_.AddB(pose.header.frame_seq, pose);
+    CountDropped();
+    if (joined) ProcessFrame(joined->a, joined->b);
+  }
+
+  void OnMap(const msg::ExperienceMap& map) {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    std::unordered_map<uint64_t, Pose2D> poses;
+    poses.reserve(map.experiences.size());
+    for (const msg::Experience& e : map.experiences) {
+      if (!std::isfinite(e.x_m) || !std::isfinite(e.y_m) || !std::isfinite(e.theta_rad)) {
+        context_.Reject("map", "experience " + std::to_string(e.id) + " has a non-finite pose");
+        return;
+      }
+      poses[e.id] = {e.x_m, e.y_m, e.theta_rad};
+    }
+    latest_map_version_ = std::max(latest_map_version_, map.map_version);
+    if (rebuilt_version_ && map.map_version <= *rebuilt_version_) return;
+    rebuilt_version_ = map.map_version;
+    if (!AnchorsMoved(poses)) return;
+    const auto lookup = [&poses](uint64_t id) -> std::optional<Pose2D> {
+      if (auto it = poses.find(id); it != poses.end()) return it->second;
+      return std::nullopt;
+    };
+    const size_t moved = map_.Rebuild(lookup);
+    spdlog::info("map version {}: rebuilt the grid ({} of {} profiles moved)", map.map_version, moved,
+                 map_.profiles().size());
+    dirty_ = true;
+    PublishGrid(last_header_, map.map_version);
+  }
+
+  bool AnchorsMoved(const std::unordered_map<uint64_t, Pose2D>& poses) const {
+    for (const AnchoredProfile& p : map_.profiles()) {
+      auto it = poses.find(p.experience_id);
+      if (it == poses.end()) continue;
+      const Pose2D& now = it->second;
+      if (std::hypot(now.x - p.experience_pose.x, now.y - p.experience_pose.y) >= config_.rebuild_min_shift_m ||
+          std::abs(NormalizeAngle(now.theta - p.experience_pose.theta)) >= config_.rebuild_min_turn_rad)
+        return true;
+    }
+    return false;
+  }
+
+  void ProcessFrame(const msg::Image& image, const msg::ExperiencePose& pose) {
+    const int type = image.encoding == "bgr8" ? CV_8UC3 : CV_8UC1;
+    const cv::Mat view(static_cast<int>(image.height), static_cast<int>(image.width), type,
+                       const_cast<uint8_t*>(image.data.data()), image.step);
+    const Pose2D robot{pose.x_m, pose.y_m, pose.theta_rad};
+    const Pose2D experience{pose.experience_x_m, pose.experience_y_m, pose.experience_theta_rad};
+    try {
+      RadialObstacleProfile rop = pipeline_.ProfileFromImage(view);
+      map_.AddProfile(pose.current_experience_id, experience, robot, std::move(rop));
+    } catch (const std::invalid_argument& e) {
+      context_.Reject("frame", e.what());
+      return;
+    }
+    dirty_ = true;
+    last_header_ = pose.header;
+    context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
+    profile_pub_->Publish(
+        ToMessage(pose.header, map_.profiles().back(), static_cast<float>(config_.sensor.reliable_range_m)));
+    if (++frames_since_grid_ >= config_.grid_publish_every_n_frames) PublishGrid(pose.header, latest_map_version_);
+  }
+
+  void PublishGrid(const msg::Header& header, uint64_t map_version) {
+    frames_since_grid_ = 0;
+    const OccupancyGrid& grid = map_.grid();
+    msg::OccupancyGrid out;
+    out.header = header;
+    if (out.header.robot_id.empty()) out.header.robot_id = context_.robot_id();
+    out.map_version = map_version;
+    out.width = static_cast<uint32_t>(grid.width());
+    out.height = static_cast<uint32_t>(grid.height());
+    out.resolution_m = static_cast<float>(grid.grid_config().resolution_m);
+    out.origin_x_m = grid.grid_config().origin_x_m;
+    out.origin_y_m = grid.grid_config().origin_y_m;
+    out.cells = grid.ToRosCells();
+    grid_pub_->Publish(out);
+  }
+
+  void CountDropped() {
+    const uint64_t dropped = joiner_.dropped();
+    if (dropped > reported_dropped_) {
+      // Each dropped image or pose counts as one rejected input.
+      for (; reported_dropped_ < dropped; ++reported_dropped_)
+        context_.Reject("unjoined_frame", "an image or pose whose partner frame never came was dropped");
+    }
+  }
+
+  void LoadState() {
+    const std::string path = context_.StateFilePath();
+    if (path.empty() || context_.runtime().fresh || !std::filesystem::exists(path)) return;
+    proto::OccupancyState state;
+    ReadStateFile(path, kStateKind, kStateVersion, state);  // throws StateFileError when corrupt
+    AnchoredProfileMap saved = AnchoredProfileMap::FromProto(state);  // validates the whole message
+    // Replay into the configured grid (the saved grid parameters may differ from today's config).
+    for (const AnchoredProfile& p : saved.profiles())
+      map_.AddProfile(p.experience_id, p.experience_pose, Compose(p.experience_pose, p.offset), p.profile);
+    spdlog::info("loaded {} anchored profiles from {}", map_.profiles().size(), path);
+  }
+
+  void SaveState() {
+    const std::string path = context_.StateFilePath();
+    if (path.empty()) return;
+    proto::OccupancyState state;
+    {
+      std::lock_guard lock(mutex_);
+      if (!dirty_) return;
+      state = map_.ToProto();
+      dirty_ = false;
+    }
+    try {
+      WriteStateFile(path, kStateKind, kStateVersion, state);
+    } catch (const std::exception& e) {
+      spdlog::error("could not save state: {}", e.what());
+    }
+  }
+
+  void ExportMaps() {
+    if (!config_.export_maps_on_shutdown || context_.runtime().state_dir.empty()) return;
+    const std::filesystem::path dir(context_.runtime().state_dir);
+    std::lock_guard lock(mutex_);
+    try {
+      WriteRosMap(map_.grid(), dir / "grid");
+      WritePng(map_.grid(), dir / "occupancy.png");
+    } catch (const std::exception& e) {
+      spdlog::error("could not export the grid: {}", e.what());
+    }
+  }
+
+  ServiceContext& context_;
+  const Config config_;
+  const ObstacleProfilePipeline pipeline_;
+  std::shared_ptr<bus::Publisher<msg::ObstacleProfile>> profile_pub_;
+  std::shared_ptr<bus::Publisher<msg::OccupancyGrid>> grid_pub_;
+
+  std::mutex mutex_;
+  bool stopped_ = false;
+  AnchoredProfileMap map_;
+  FrameJoiner<msg::Image, msg::ExperiencePose> joiner_;
+  uint64_t reported_dropped_ = 0;
+  uint64_t latest_map_version_ = 0;
+  std::optional<uint64_t> rebuilt_version_;
+  msg::Header last_header_;
+  int frames_since_grid_ = 0;
+  bool dirty_ = true;  // a fresh start saves (an empty map) too, so a restart sees the file
+  std::chrono::steady_clock::time_point last_save_;
+};
+
+OccupancyNode::OccupancyNode(ServiceContext& context, const Config& config)
+    : mapper_(std::make_shared<Mapper>(context, config)) {
+  Mapper::Subscribe(mapper_);
+}
+
+OccupancyNode::~OccupancyNode() { mapper_->Stop(); }
+
+void OccupancyNode::Tick() { mapper_->Tick(); }
+
+}  // namespace rslam::occupancy

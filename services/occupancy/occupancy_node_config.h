@@ -1,0 +1,102 @@
+#pragma once
+// Configuration of the occupancy service (YAML section `occupancy`). The obstacle-profile
+// pipeline's keys sit at the top of the section (camera, floor, profile, floor_colour_bgr,
+// correct_images), so a library config and a service config read alike.
+//
+// The defaults are those of the simulator (tools/sim/sim_config.h): a 320x240 camera with a
+// 60-degree horizontal field of view, 0.3 m above the floor, tilted down 0.3 rad, and the
+// simulator's floor colour, so the demo works with one config file for every process. At that
+// height the floor is seen from 0.35 m to the horizon; one pixel is about 3 cm at 1.5 m, which
+// is where ranges stop being trusted (reliable_range_m).
+
+#include <cmath>
+#include <string>
+
+#include "common/config/config_error.h"
+#include "services/occupancy/obstacle_profile_pipeline.h"
+#include "services/occupancy/occupancy_grid.h"
+
+namespace rslam::occupancy {
+
+inline ObstacleProfileConfig SimulatorMatchedPipelineConfig() {
+  ObstacleProfileConfig c;
+  c.camera.width = 320;
+  c.camera.height = 240;
+  c.camera.fx = c.camera.fy = 160.0 / std::tan(30.0 * M_PI / 180.0);  // (W/2) / tan(hfov/2)
+  c.camera.cx = (320 - 1) / 2.0;
+  c.camera.cy = (240 - 1) / 2.0;
+  c.camera.height_m = 0.3;
+  c.camera.tilt_rad = 0.3;
+  c.camera.forward_offset_m = 0.0;
+  c.floor_colour_bgr = {70, 110, 150};
+  c.profile.scan_range_m = 2.0;
+  c.profile.range_step_m = 0.01;
+  return c;
+}
+
+inline GridConfig SimulatorMatchedGridConfig() {
+  GridConfig g;
+  g.resolution_m = 0.05;
+  g.width = 800;  // 40 m x 40 m around the map origin (the robot's first pose)
+  g.height = 800;
+  g.origin_x_m = -20.0;
+  g.origin_y_m = -20.0;
+  return g;
+}
+
+inline SensorModelConfig SimulatorMatchedSensorConfig() {
+  SensorModelConfig s;
+  s.reliable_range_m = 1.5;
+  return s;
+}
+
+struct OccupancyNodeConfig {
+  ObstacleProfileConfig pipeline = SimulatorMatchedPipelineConfig();
+  GridConfig grid = SimulatorMatchedGridConfig();
+  SensorModelConfig sensor = SimulatorMatchedSensorConfig();
+  int grid_publish_every_n_frames = 10;
+  int join_buffer_frames = 30;          // images / poses waiting for their partner, per side
+  double rebuild_min_shift_m = 0.005;   // experience moves smaller than this do not rebuild
+  double rebuild_min_turn_rad = 0.002;
+  bool export_maps_on_shutdown = true;  // grid.pgm, grid.yaml, occupancy.png in the state dir
+
+  template <class V>
+  void VisitFields(V& v) {
+    pipeline.VisitFields(v);
+    v("grid", grid, "occupancy grid geometry (map frame)");
+    v("sensor", sensor, "range sensor model of the grid update");
+    v("grid_publish_every_n_frames", grid_publish_every_n_frames,
+      "publish occupancy/grid after this many processed frames (and after every rebuild)");
+    v("join_buffer_frames", join_buffer_frames,
+      "images and poses kept waiting for their partner frame, per topic");
+    v("rebuild_min_shift_m", rebuild_min_shift_m,
+      "a corrected map rebuilds the grid only if an experience moved at least this far (m)");
+    v("rebuild_min_turn_rad", rebuild_min_turn_rad, "... or turned at least this much (rad)");
+    v("export_maps_on_shutdown", export_maps_on_shutdown,
+      "write grid.pgm, grid.yaml and occupancy.png into the state dir on shutdown");
+  }
+
+  void Validate() const {
+    pipeline.Validate();  // keys of the pipeline are at the top of the section already
+    Nested(grid, "grid");
+    Nested(sensor, "sensor");
+    Require(grid_publish_every_n_frames >= 1, "grid_publish_every_n_frames", "must be >= 1");
+    Require(join_buffer_frames >= 1 && join_buffer_frames <= 10000, "join_buffer_frames", "must be 1..10000");
+    Require(std::isfinite(rebuild_min_shift_m) && rebuild_min_shift_m >= 0, "rebuild_min_shift_m",
+            "must be >= 0");
+    Require(std::isfinite(rebuild_min_turn_rad) && rebuild_min_turn_rad >= 0, "rebuild_min_turn_rad",
+            "must be >= 0");
+  }
+
+ private:
+  template <class T>
+  static void Nested(const T& cfg, const std::string& prefix) {
+    try {
+      cfg.Validate();
+    } catch (const ConfigError& e) {
+      throw ConfigError(prefix + "." + e.key(), e.reason());
+    }
+  }
+};
+
+}  // namespace rslam::occupancy
