@@ -82,6 +82,12 @@ class OccupancyNode::Mapper {
     LoadState();
     profile_pub_ = context_.Advertise(bus::topics::kOccupancyProfile);
     grid_pub_ = context_.Advertise(bus::topics::kOccupancyGrid);
+    if (!map_.profiles().empty()) {
+      // A restarted mapper shows its restored grid at once (state QoS: late joiners get it too).
+      std::lock_guard lock(mutex_);
+      last_header_.robot_id = context_.robot_id();
+      PublishGrid(last_header_, latest_map_version_);
+    }
   }
 
   // Subscriptions are made once the mapper is owned by a shared_ptr. The callbacks share it: the

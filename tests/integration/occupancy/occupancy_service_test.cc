@@ -1,0 +1,329 @@
+// rslam-occupancy as a black box on a private DDS domain: camera frames rendered by the
+// simulator's renderer in a room with a wall 1 m ahead, with matching experience-map poses.
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/bus/participant.h"
+#include "common/bus/publisher.h"
+#include "common/bus/subscriber.h"
+#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/test_domain.h"
+#include "tools/sim/camera_renderer.h"
+#include "tools/sim/world_map.h"
+
+namespace rslam {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ServiceProcess;
+using testing::TempDir;
+using testing::WaitUntil;
+
+const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-occupancy";
+constexpr double kWallX = 1.0;  // the wall's face, metres ahead of the robot at the origin
+
+// A 4 m x 4 m room around the origin (the map border is a wall) with a wall across it at x = 1 m.
+sim::WorldMap RoomWithWallAhead() {
+  constexpr double kResolution = 0.02;
+  constexpr int kSize = 200;
+  std::vector<sim::CellClass> cells(kSize * kSize, sim::CellClass::kFree);
+  const int wall_ix = static_cast<int>(std::lround((kWallX + 2.0) / kResolution));
+  for (int iy = 0; iy < kSize; ++iy)
+    for (int ix = wall_ix; ix < kSize; ++ix) cells[iy * kSize + ix] = sim::CellClass::kOccupied;
+  return sim::WorldMap(kSize, kSize, kResolution, Eigen::Vector2d(-2.0, -2.0), std::move(cells));
+}
+
+int8_t CellAt(const msg::OccupancyGrid& g, double x, double y) {
+  const int cx = static_cast<int>(std::floor((x - g.origin_x_m) / g.resolution_m));
+  const int cy = static_cast<int>(std::floor((y - g.origin_y_m) / g.resolution_m));
+  return g.cells.at(static_cast<size_t>(cy) * g.width + cx);
+}
+
+// Highest occupancy along y = 0 between x0 and x1 (unknown counts as -1).
+int MaxAlongX(const msg::OccupancyGrid& g, double x0, double x1) {
+  int best = -1;
+  for (double x = x0; x <= x1; x += g.resolution_m * 0.5) best = std::max<int>(best, CellAt(g, x, 0.0));
+  return best;
+}
+
+class OccupancyServiceTest : public ::testing::Test {
+ protected:
+  OccupancyServiceTest() : world_(RoomWithWallAhead()), renderer_(world_, sim::SceneConfig{}, sim::CameraConfig{}) {
+    bus::BusConfig config;
+    config.domain_id = domain_.id();
+    participant_ = bus::Participant::Create(config);
+    image_pub_ = std::make_unique<bus::Publisher<msg::Image>>(*participant_, bus::topics::kCameraImage);
+    pose_pub_ = std::make_unique<bus::Publisher<msg::ExperiencePose>>(*participant_, bus::topics::kExperienceMapPose);
+    map_pub_ = std::make_unique<bus::Publisher<msg::ExperienceMap>>(*participant_, bus::topics::kExperienceMapMap);
+    profile_sub_ = std::make_unique<bus::Subscriber<msg::ObstacleProfile>>(*participant_, bus::topics::kOccupancyProfile);
+    grid_sub_ = std::make_unique<bus::Subscriber<msg::OccupancyGrid>>(*participant_, bus::topics::kOccupancyGrid);
+    status_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
+  }
+
+  std::unique_ptr<ServiceProcess> Start(const std::vector<std::string>& extra = {}) {
+    std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--state-dir", state_dir_.path().string(),
+                                  "--set", "service.heartbeat_period_s=0.2", "--set",
+                                  "service.state_save_period_s=0.3"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    // A killed predecessor stays matched until its lease expires: count the new process on top.
+    const int images = image_pub_->MatchedSubscribers(), poses = pose_pub_->MatchedSubscribers();
+    const int profiles = profile_sub_->MatchedPublishers(), grids = grid_sub_->MatchedPublishers();
+    auto process = std::make_unique<ServiceProcess>(kBinary, args);
+    // Up when its publishers and subscribers have matched ours.
+    const bool matched = WaitUntil(
+        [&] {
+          return image_pub_->MatchedSubscribers() > images && pose_pub_->MatchedSubscribers() > poses &&
+                 profile_sub_->MatchedPublishers() > profiles && grid_sub_->MatchedPublishers() > grids;
+        },
+        10s);
+    EXPECT_TRUE(matched) << process->Output();
+    return process;
+  }
+
+  msg::Image Frame(uint64_t seq, const sim::Pose2D& pose) {
+    const cv::Mat bgr = renderer_.Render(pose, seq);
+    msg::Image image;
+    image.header = {"robot1", seq, static_cast<int64_t>(seq) * 100'000'000};
+    image.width = static_cast<uint32_t>(bgr.cols);
+    image.height = static_cast<uint32_t>(bgr.rows);
+    image.encoding = "bgr8";
+    image.step = static_cast<uint32_t>(bgr.cols * 3);
+    image.data.assign(bgr.data, bgr.data + bgr.total() * 3);
+    return image;
+  }
+
+  static msg::ExperiencePose Pose(uint64_t seq, double x, double y, double theta, uint32_t experience_id = 1,
+                                  uint64_t map_version = 1) {
+    msg::ExperiencePose pose;
+    pose.header = {"robot1", seq, static_cast<int64_t>(seq) * 100'000'000};
+    pose.current_experience_id = experience_id;
+    pose.x_m = x;
+    pose.y_m = y;
+    pose.theta_rad = theta;
+    pose.experience_x_m = 0.0;  // the experience sits at the map origin
+    pose.experience_y_m = 0.0;
+    pose.experience_theta_rad = 0.0;
+    pose.experience_count = 1;
+    pose.map_version = map_version;
+    return pose;
+  }
+
+  // Publishes the frame (pose first or image first) and waits for its profile.
+  std::optional<msg::ObstacleProfile> SendFrame(uint64_t seq, bool pose_first = true) {
+    const msg::Image image = Frame(seq, sim::Pose2D{0, 0, 0});
+    const msg::ExperiencePose pose = Pose(seq, 0, 0, 0);
+    if (pose_first) {
+      pose_pub_->Publish(pose);
+      image_pub_->Publish(image);
+    } else {
+      image_pub_->Publish(image);
+      pose_pub_->Publish(pose);
+    }
+    const auto deadline = std::chrono::steady_clock::now() + 5s;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (auto p = profile_sub_->TakeOne(200ms); p && p->header.frame_seq == seq) return p;
+    }
+    return std::nullopt;
+  }
+
+  // The next grid satisfying pred, within the timeout.
+  std::optional<msg::OccupancyGrid> AwaitGrid(const std::function<bool(const msg::OccupancyGrid&)>& pred,
+                                              std::chrono::milliseconds timeout = 5s) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (auto g = grid_sub_->TakeOne(200ms); g && pred(*g)) return g;
+    }
+    return std::nullopt;
+  }
+
+  std::optional<msg::ServiceStatus> AwaitStatus(const std::function<bool(const msg::ServiceStatus&)>& pred) {
+    const auto deadline = std::chrono::steady_clock::now() + 5s;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (auto s = status_sub_->TakeOne(200ms); s && s->service == "occupancy" && pred(*s)) return s;
+    }
+    return std::nullopt;
+  }
+
+  static bool ShowsWallAhead(const msg::OccupancyGrid& g, double wall_x) {
+    return MaxAlongX(g, wall_x - 0.1, wall_x + 0.1) >= 65 && MaxAlongX(g, 0.45, wall_x - 0.2) <= 19 &&
+           CellAt(g, wall_x + 0.5, 0.0) == -1;
+  }
+
+  testing::TestDomain domain_;
+  TempDir state_dir_;
+  sim::WorldMap world_;
+  sim::CameraRenderer renderer_;
+  std::unique_ptr<bus::Participant> participant_;
+  std::unique_ptr<bus::Publisher<msg::Image>> image_pub_;
+  std::unique_ptr<bus::Publisher<msg::ExperiencePose>> pose_pub_;
+  std::unique_ptr<bus::Publisher<msg::ExperienceMap>> map_pub_;
+  std::unique_ptr<bus::Subscriber<msg::ObstacleProfile>> profile_sub_;
+  std::unique_ptr<bus::Subscriber<msg::OccupancyGrid>> grid_sub_;
+  std::unique_ptr<bus::Subscriber<msg::ServiceStatus>> status_sub_;
+};
+
+TEST_F(OccupancyServiceTest, ProfileOfEachFrameShowsTheWallAtItsDistance) {
+  auto service = Start();
+  for (uint64_t seq = 1; seq <= 4; ++seq) {
+    const auto profile = SendFrame(seq, /*pose_first=*/seq % 2 == 0);
+    ASSERT_TRUE(profile) << "no profile for frame " << seq << "\n" << service->Output();
+    EXPECT_EQ(profile->header.robot_id, "robot1");
+    EXPECT_EQ(profile->header.stamp_ns, static_cast<int64_t>(seq) * 100'000'000);
+    EXPECT_EQ(profile->experience_id, 1u);
+    ASSERT_FALSE(profile->ranges_m.empty());
+    // The bin looking straight ahead.
+    size_t ahead = 0;
+    for (size_t i = 0; i < profile->ranges_m.size(); ++i)
+      if (std::abs(profile->bearing_min_rad + i * profile->bearing_step_rad) <
+          std::abs(profile->bearing_min_rad + ahead * profile->bearing_step_rad))
+        ahead = i;
+    EXPECT_NEAR(profile->ranges_m[ahead], kWallX, 0.05);
+  }
+}
+
+TEST_F(OccupancyServiceTest, GridHasTheWallOccupiedAndTheFloorBeforeItFree) {
+  auto service = Start({"--set", "occupancy.grid_publish_every_n_frames=10"});
+  for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+  const auto grid = AwaitGrid([](const msg::OccupancyGrid&) { return true; });
+  ASSERT_TRUE(grid) << service->Output();
+  EXPECT_EQ(grid->header.frame_seq, 10u);
+  EXPECT_EQ(grid->map_version, 1u);
+  EXPECT_EQ(grid->cells.size(), static_cast<size_t>(grid->width) * grid->height);
+  EXPECT_GE(MaxAlongX(*grid, kWallX - 0.1, kWallX + 0.1), 65) << "wall not occupied";
+  EXPECT_LE(MaxAlongX(*grid, 0.45, kWallX - 0.2), 19) << "floor before the wall not free";
+  EXPECT_EQ(CellAt(*grid, kWallX + 0.5, 0.0), -1) << "behind the wall should stay unknown";
+}
+
+TEST_F(OccupancyServiceTest, CorrectedExperienceMovesTheOccupiedCells) {
+  auto service = Start();
+  for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+  ASSERT_TRUE(AwaitGrid([](const msg::OccupancyGrid& g) { return ShowsWallAhead(g, kWallX); }))
+      << service->Output();
+
+  // Loop closure moved experience 1 (and everything seen from it) half a metre along x.
+  msg::ExperienceMap map;
+  map.header = {"robot1", 10, 1'000'000'000};
+  map.map_version = 2;
+  map.current_experience_id = 1;
+  msg::Experience e;
+  e.id = 1;
+  e.x_m = 0.5;
+  map.experiences.push_back(e);
+  map_pub_->Publish(map);
+
+  const auto moved = AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 2; });
+  ASSERT_TRUE(moved) << service->Output();
+  EXPECT_GE(MaxAlongX(*moved, kWallX + 0.5 - 0.1, kWallX + 0.5 + 0.1), 65) << "wall not at its corrected place";
+  EXPECT_LE(MaxAlongX(*moved, kWallX - 0.1, kWallX + 0.1), 19) << "old wall position should now be free floor";
+}
+
+TEST_F(OccupancyServiceTest, MalformedInputIsCountedAndTheServiceKeepsWorking) {
+  auto service = Start();
+  ASSERT_TRUE(SendFrame(1)) << service->Output();
+
+  msg::Image good = Frame(2, sim::Pose2D{});
+  msg::Image short_data = good;
+  short_data.data.resize(good.data.size() / 2);
+  msg::Image unknown_encoding = good;
+  unknown_encoding.encoding = "rgb16";
+  msg::Image huge = good;
+  huge.width = 100000;
+  huge.height = 100000;
+  huge.step = 300000;
+  msg::Image wrong_size = Frame(2, sim::Pose2D{});
+  wrong_size.width = 160;
+  wrong_size.step = 480;
+  msg::ExperiencePose nan_pose = Pose(2, std::numeric_limits<double>::quiet_NaN(), 0, 0);
+  for (const msg::Image* bad : {&short_data, &unknown_encoding, &huge, &wrong_size}) image_pub_->Publish(*bad);
+  pose_pub_->Publish(nan_pose);
+
+  EXPECT_TRUE(service->Running());
+  const auto profile = SendFrame(3);
+  ASSERT_TRUE(profile) << "no answer to a good frame after bad ones\n" << service->Output();
+  const auto status = AwaitStatus([](const msg::ServiceStatus& s) { return s.messages_rejected >= 5; });
+  ASSERT_TRUE(status) << service->Output();
+  EXPECT_EQ(status->state, "running");
+}
+
+TEST_F(OccupancyServiceTest, SigtermSavesStateAndExportsTheGrid) {
+  {
+    auto service = Start();
+    for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+    service->Signal(SIGTERM);
+    ASSERT_EQ(service->WaitExit(10s), 0) << service->Output();
+  }
+  const auto dir = state_dir_.path();
+  EXPECT_TRUE(std::filesystem::exists(dir / "occupancy.pb"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "grid.pgm"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "grid.yaml"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "occupancy.png"));
+
+  // Restarted, it shows the restored grid at once, without any new frame.
+  auto restarted = Start();
+  EXPECT_TRUE(AwaitGrid([](const msg::OccupancyGrid& g) { return ShowsWallAhead(g, kWallX); }))
+      << restarted->Output();
+}
+
+TEST_F(OccupancyServiceTest, RestartAfterSigkillReloadsTheLastSavedStateAndContinues) {
+  const auto state_file = state_dir_.path() / "occupancy.pb";
+  {
+    auto service = Start();
+    for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+    const auto after_frames = std::filesystem::file_time_type::clock::now();
+    // A periodic save made after the last frame (every 0.3 s here).
+    ASSERT_TRUE(WaitUntil(
+        [&] {
+          std::error_code ec;
+          return std::filesystem::exists(state_file) && std::filesystem::last_write_time(state_file, ec) > after_frames;
+        },
+        5s));
+    service->Signal(SIGKILL);
+    ASSERT_EQ(service->WaitExit(5s), 128 + SIGKILL);
+  }
+  auto restarted = Start();
+  ASSERT_TRUE(AwaitGrid([](const msg::OccupancyGrid& g) { return ShowsWallAhead(g, kWallX); }))
+      << restarted->Output();
+  // And it goes on mapping.
+  const auto profile = SendFrame(11);
+  ASSERT_TRUE(profile) << restarted->Output();
+  EXPECT_NEAR(profile->ranges_m[profile->ranges_m.size() / 2], kWallX, 0.1);
+}
+
+TEST_F(OccupancyServiceTest, CorruptStateFileIsRefusedWithExitOne) {
+  {
+    std::ofstream out(state_dir_.path() / "occupancy.pb", std::ios::binary);
+    out << "RSLAMPB1 certainly not a state file";
+  }
+  const auto [code, output] = testing::RunToExit(
+      kBinary, {"--domain", std::to_string(domain_.id()), "--state-dir", state_dir_.path().string()});
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("occupancy.pb"), std::string::npos) << output;
+}
+
+TEST(OccupancyServiceCommandLineTest, HelpListsConfigKeys) {
+  const auto [code, output] = testing::RunToExit(kBinary, {"--help"});
+  EXPECT_EQ(code, 0) << output;
+  for (const char* key : {"occupancy.camera.height_m", "occupancy.camera.tilt_rad", "occupancy.floor_colour_bgr",
+                          "occupancy.grid.resolution_m", "occupancy.sensor.reliable_range_m",
+                          "occupancy.grid_publish_every_n_frames"})
+    EXPECT_NE(output.find(key), std::string::npos) << key;
+}
+
+TEST(OccupancyServiceCommandLineTest, UnknownConfigKeyExitsTwoNamingIt) {
+  const auto [code, output] = testing::RunToExit(kBinary, {"--set", "occupancy.unknown_key=1"});
+  EXPECT_EQ(code, 2) << output;
+  EXPECT_NE(output.find("occupancy.unknown_key"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace rslam
