@@ -1,0 +1,250 @@
+// rslam-explorer as a black box on a private DDS domain: the test plays the occupancy mapper,
+// the experience map and the robot's base.
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/bus/participant.h"
+#include "common/bus/publisher.h"
+#include "common/bus/subscriber.h"
+#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/test_domain.h"
+
+namespace rslam {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ServiceProcess;
+using testing::TempDir;
+using testing::WaitUntil;
+
+const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-explorer";
+
+// 3 m x 3 m around the origin, 5 cm cells.
+msg::OccupancyGrid EmptyGrid(int8_t fill) {
+  msg::OccupancyGrid g;
+  g.header = {"robot1", 1, 100'000'000};
+  g.map_version = 1;
+  g.width = 60;
+  g.height = 60;
+  g.resolution_m = 0.05f;
+  g.origin_x_m = -1.5;
+  g.origin_y_m = -1.5;
+  g.cells.assign(60 * 60, fill);
+  return g;
+}
+
+// Free floor within 0.6 m of the robot, unknown beyond.
+msg::OccupancyGrid PartlyExploredGrid() {
+  msg::OccupancyGrid g = EmptyGrid(-1);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 60; ++x)
+      if (std::hypot(-1.5 + (x + 0.5) * 0.05, -1.5 + (y + 0.5) * 0.05) < 0.6) g.cells[y * 60 + x] = 0;
+  return g;
+}
+
+// Everything known: free floor inside a wall along the border.
+msg::OccupancyGrid FullyExploredGrid() {
+  msg::OccupancyGrid g = EmptyGrid(0);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 60; ++x)
+      if (x == 0 || y == 0 || x == 59 || y == 59) g.cells[y * 60 + x] = 100;
+  g.map_version = 2;
+  return g;
+}
+
+msg::ExperiencePose RobotAt(double x, double y, double theta, uint64_t seq = 1) {
+  msg::ExperiencePose p;
+  p.header = {"robot1", seq, static_cast<int64_t>(seq) * 100'000'000};
+  p.x_m = x;
+  p.y_m = y;
+  p.theta_rad = theta;
+  return p;
+}
+
+class ExplorerServiceTest : public ::testing::Test {
+ protected:
+  ExplorerServiceTest() {
+    bus::BusConfig config;
+    config.domain_id = domain_.id();
+    participant_ = bus::Participant::Create(config);
+    grid_pub_ = std::make_unique<bus::Publisher<msg::OccupancyGrid>>(*participant_, bus::topics::kOccupancyGrid);
+    pose_pub_ = std::make_unique<bus::Publisher<msg::ExperiencePose>>(*participant_, bus::topics::kExperienceMapPose);
+    feedback_pub_ = std::make_unique<bus::Publisher<msg::MotionFeedback>>(*participant_, bus::topics::kMotionFeedback);
+    command_sub_ = std::make_unique<bus::Subscriber<msg::MotionCommand>>(*participant_, bus::topics::kExplorerCommand);
+    status_sub_ = std::make_unique<bus::Subscriber<msg::ExplorerStatus>>(*participant_, bus::topics::kExplorerStatus);
+    heartbeat_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
+  }
+
+  std::unique_ptr<ServiceProcess> Start() {
+    const int poses = pose_pub_->MatchedSubscribers(), feedback = feedback_pub_->MatchedSubscribers();
+    const int commands = command_sub_->MatchedPublishers();
+    auto process = std::make_unique<ServiceProcess>(
+        kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--state-dir",
+                                          state_dir_.path().string(), "--set", "service.heartbeat_period_s=0.2",
+                                          "--set", "explorer.fresh_grid_timeout_s=0.3"});
+    const bool matched = WaitUntil(
+        [&] {
+          return pose_pub_->MatchedSubscribers() > poses && feedback_pub_->MatchedSubscribers() > feedback &&
+                 command_sub_->MatchedPublishers() > commands;
+        },
+        10s);
+    EXPECT_TRUE(matched) << process->Output();
+    return process;
+  }
+
+  std::optional<msg::MotionCommand> NextCommand(std::chrono::milliseconds timeout = 5s) {
+    return command_sub_->TakeOne(timeout);
+  }
+
+  void Feedback(uint64_t command_seq, msg::MotionState state) {
+    msg::MotionFeedback f;
+    f.header = {"robot1", 1, 0};
+    f.command_seq = command_seq;
+    f.state = state;
+    feedback_pub_->Publish(f);
+  }
+
+  std::optional<msg::ExplorerStatus> AwaitStatus(const std::function<bool(const msg::ExplorerStatus&)>& pred,
+                                                 std::chrono::milliseconds timeout = 10s) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (auto s = status_sub_->TakeOne(200ms); s && pred(*s)) return s;
+    }
+    return std::nullopt;
+  }
+
+  testing::TestDomain domain_;
+  TempDir state_dir_;
+  std::unique_ptr<bus::Participant> participant_;
+  std::unique_ptr<bus::Publisher<msg::OccupancyGrid>> grid_pub_;
+  std::unique_ptr<bus::Publisher<msg::ExperiencePose>> pose_pub_;
+  std::unique_ptr<bus::Publisher<msg::MotionFeedback>> feedback_pub_;
+  std::unique_ptr<bus::Subscriber<msg::MotionCommand>> command_sub_;
+  std::unique_ptr<bus::Subscriber<msg::ExplorerStatus>> status_sub_;
+  std::unique_ptr<bus::Subscriber<msg::ServiceStatus>> heartbeat_sub_;
+};
+
+TEST_F(ExplorerServiceTest, WaitsForAGridThenSendsOneCommandAtATime) {
+  auto service = Start();
+  ASSERT_TRUE(AwaitStatus([](const msg::ExplorerStatus& s) {
+    return s.state == msg::ExplorationState::EXPLORATION_WAITING;
+  })) << service->Output();
+  pose_pub_->Publish(RobotAt(0, 0, 0));
+  EXPECT_FALSE(NextCommand(500ms)) << "no command before a grid";
+
+  grid_pub_->Publish(PartlyExploredGrid());
+  const auto first = NextCommand();
+  ASSERT_TRUE(first) << service->Output();
+  EXPECT_NE(first->kind, msg::MotionKind::MOTION_STOP);
+  EXPECT_EQ(first->header.robot_id, "robot1");
+  EXPECT_FALSE(NextCommand(500ms)) << "a second command before the first one's feedback";
+
+  Feedback(first->command_seq, msg::MotionState::MOTION_EXECUTING);
+  EXPECT_FALSE(NextCommand(300ms)) << "EXECUTING is not DONE";
+  Feedback(first->command_seq, msg::MotionState::MOTION_DONE);
+  const auto second = NextCommand();
+  ASSERT_TRUE(second) << service->Output();
+  EXPECT_GT(second->command_seq, first->command_seq);
+  EXPECT_TRUE(AwaitStatus([](const msg::ExplorerStatus& s) {
+    return s.state == msg::ExplorationState::EXPLORATION_EXPLORING && s.commands_sent >= 2;
+  })) << service->Output();
+}
+
+TEST_F(ExplorerServiceTest, FullyKnownGridCompletesWithStop) {
+  auto service = Start();
+  pose_pub_->Publish(RobotAt(0, 0, 0));
+  grid_pub_->Publish(PartlyExploredGrid());
+  auto command = NextCommand();
+  ASSERT_TRUE(command) << service->Output();
+
+  grid_pub_->Publish(FullyExploredGrid());
+  // Play the base: every command succeeds, until the explorer stops.
+  for (int i = 0; i < 30 && command && command->kind != msg::MotionKind::MOTION_STOP; ++i) {
+    Feedback(command->command_seq, msg::MotionState::MOTION_DONE);
+    command = NextCommand();
+  }
+  ASSERT_TRUE(command) << service->Output();
+  EXPECT_EQ(command->kind, msg::MotionKind::MOTION_STOP);
+  const auto status = AwaitStatus([](const msg::ExplorerStatus& s) {
+    return s.state == msg::ExplorationState::EXPLORATION_COMPLETE;
+  });
+  ASSERT_TRUE(status) << service->Output();
+  EXPECT_FALSE(status->reason.empty());
+}
+
+TEST_F(ExplorerServiceTest, BlockedMoveIsReplanned) {
+  auto service = Start();
+  pose_pub_->Publish(RobotAt(0, 0, 0));
+  grid_pub_->Publish(PartlyExploredGrid());
+  auto command = NextCommand();
+  ASSERT_TRUE(command) << service->Output();
+  Feedback(command->command_seq, msg::MotionState::MOTION_BLOCKED);
+  // The explorer waits for a newer grid (or fresh_grid_timeout_s), then plans again.
+  grid_pub_->Publish(PartlyExploredGrid());
+  const auto replanned = NextCommand();
+  ASSERT_TRUE(replanned) << service->Output();
+  EXPECT_GT(replanned->command_seq, command->command_seq);
+}
+
+TEST_F(ExplorerServiceTest, MalformedGridIsCountedAndTheServiceKeepsRunning) {
+  auto service = Start();
+  msg::OccupancyGrid bad = PartlyExploredGrid();
+  bad.cells.resize(bad.cells.size() - 7);  // cells do not match width x height
+  grid_pub_->Publish(bad);
+  pose_pub_->Publish(RobotAt(0, 0, 0));
+  const auto deadline = std::chrono::steady_clock::now() + 5s;
+  bool counted = false;
+  while (!counted && std::chrono::steady_clock::now() < deadline) {
+    if (auto s = heartbeat_sub_->TakeOne(200ms); s && s->service == "explorer" && s->messages_rejected >= 1)
+      counted = true;
+  }
+  EXPECT_TRUE(counted) << service->Output();
+  EXPECT_FALSE(NextCommand(300ms)) << "planned on a malformed grid";
+  EXPECT_TRUE(service->Running());
+
+  grid_pub_->Publish(PartlyExploredGrid());
+  EXPECT_TRUE(NextCommand()) << service->Output();
+}
+
+TEST_F(ExplorerServiceTest, RestartKeepsNumberingCommandsUpwards) {
+  uint64_t first_run_seq = 0;
+  {
+    auto service = Start();
+    pose_pub_->Publish(RobotAt(0, 0, 0));
+    grid_pub_->Publish(PartlyExploredGrid());
+    const auto command = NextCommand();
+    ASSERT_TRUE(command) << service->Output();
+    first_run_seq = command->command_seq;
+    service->Signal(SIGTERM);
+    ASSERT_EQ(service->WaitExit(10s), 0) << service->Output();
+  }
+  EXPECT_TRUE(std::filesystem::exists(state_dir_.path() / "explorer.pb"));
+  auto restarted = Start();
+  pose_pub_->Publish(RobotAt(0, 0, 0));  // the grid comes again from the state topic
+  const auto command = NextCommand();
+  ASSERT_TRUE(command) << restarted->Output();
+  EXPECT_GT(command->command_seq, first_run_seq);
+}
+
+TEST(ExplorerServiceCommandLineTest, HelpListsConfigKeys) {
+  const auto [code, output] = testing::RunToExit(kBinary, {"--help"});
+  EXPECT_EQ(code, 0) << output;
+  for (const char* key : {"explorer.robot_radius_m", "explorer.coarse_cell_factor", "explorer.feedback_timeout_s"})
+    EXPECT_NE(output.find(key), std::string::npos) << key;
+}
+
+TEST(ExplorerServiceCommandLineTest, UnknownConfigKeyExitsTwoNamingIt) {
+  const auto [code, output] = testing::RunToExit(kBinary, {"--set", "explorer.unknown_key=1"});
+  EXPECT_EQ(code, 2) << output;
+  EXPECT_NE(output.find("explorer.unknown_key"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace rslam
