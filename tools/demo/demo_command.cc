@@ -1,0 +1,366 @@
+#include "tools/demo/demo_command.h"
+
+#include <unistd.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "common/bus/bus_config.h"
+#include "common/config/config_loader.h"
+#include "common/node/shutdown_signal.h"
+#include "tools/demo/demo_artifacts.h"
+#include "tools/demo/demo_metrics.h"
+#include "tools/demo/demo_monitor.h"
+#include "tools/launch/launch_command.h"
+#include "tools/launch/launch_profile.h"
+#include "tools/launch/process_supervisor.h"
+#include "tools/sim/sim_node.h"
+
+namespace rslam::demo {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+constexpr int kDefaultDomain = 17;
+// Started in this order (and stopped in reverse: the simulator first, the recorder last).
+const std::vector<std::string> kServices = {"camera",         "odometry",  "templates", "pose_cells",
+                                            "experience_map", "occupancy", "explorer"};
+constexpr double kLoopClosureMaxDistanceM = 1.0;
+
+std::string ResolveDds(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  if (const char* env = std::getenv("RSLAM_DDS"); env != nullptr && *env != '\0') return env;
+  return "cyclone";
+}
+
+int ResolveDomain(int flag) {
+  if (flag >= 0) return flag;
+  if (const char* env = std::getenv("RSLAM_DOMAIN"); env != nullptr && *env != '\0') return std::atoi(env);
+  return kDefaultDomain;
+}
+
+// Old logs, state and results of a previous run in the same folder would mix with this run's.
+void PrepareOutputDir(const fs::path& out) {
+  fs::create_directories(out / "logs");
+  fs::create_directories(out / "state");
+  for (const auto& [dir, ext] : {std::pair{out / "logs", ".log"}, std::pair{out / "state", ".pb"}})
+    for (const auto& entry : fs::directory_iterator(dir))
+      if (entry.is_regular_file() && entry.path().extension() == ext) fs::remove(entry.path());
+  for (const char* name : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid.pgm",
+                           "grid.yaml", "recording.mcap"}) {
+    std::error_code ignored;
+    fs::remove(out / name, ignored);
+  }
+}
+
+bool RecordCommandAvailable(const std::string& bin_dir) {
+  const std::string rslam = (fs::path(bin_dir) / "rslam").string();
+  if (::access(rslam.c_str(), X_OK) != 0) return false;
+  return std::system(("'" + rslam + "' record --help >/dev/null 2>&1").c_str()) == 0;
+}
+
+const char* StateName(std::optional<msg::ExplorationState> s) {
+  if (!s) return "-";
+  switch (*s) {
+    case msg::ExplorationState::EXPLORATION_WAITING: return "waiting";
+    case msg::ExplorationState::EXPLORATION_EXPLORING: return "exploring";
+    case msg::ExplorationState::EXPLORATION_COMPLETE: return "complete";
+    case msg::ExplorationState::EXPLORATION_STOPPED: return "stopped";
+  }
+  return "?";
+}
+
+nlohmann::json OrNull(std::optional<double> v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
+
+std::string Percent(std::optional<double> v) {
+  if (!v) return "n/a";
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(1) << 100.0 * *v << "%";
+  return s.str();
+}
+
+std::string Metres(std::optional<double> v) {
+  if (!v) return "n/a";
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(3) << *v << " m";
+  return s.str();
+}
+
+struct TickContext {
+  std::function<void()> tick;
+};
+
+}  // namespace
+
+int RunDemo(const DemoOptions& options) {
+  const auto wall_start = Clock::now();
+  const std::string bin_dir = options.bin_dir.empty() ? launch::ExecutableDir() : options.bin_dir;
+  const std::string config_path =
+      options.config.empty() ? launch::DeployDir() + "/config/demo.yaml" : fs::absolute(options.config).string();
+  const std::string dds = ResolveDds(options.dds);
+  const int domain = ResolveDomain(options.domain);
+  const fs::path out = fs::absolute(options.out_dir);
+  PrepareOutputDir(out);
+
+  // The world and start pose, as the simulator will see them.
+  YAML::Node root = LoadYamlFile(config_path);
+  std::vector<std::string> extra_args;
+  if (!options.world.empty()) {
+    const std::string world = fs::exists(options.world) ? fs::absolute(options.world).string() : options.world;
+    ApplyOverride(root, "sim.world_yaml=" + world);
+    extra_args.insert(extra_args.end(), {"--set", "sim.world_yaml=" + world});
+  }
+  if (options.wheel_odometry) extra_args.insert(extra_args.end(), {"--set", "odometry.source=wheel"});
+  sim::SimNodeConfig sim_config;
+  LoadConfigSection(root, "sim", sim_config);
+  const std::string world_path = sim::ResolveWorldPath(sim_config.sim.world_yaml);
+  const sim::WorldMap world = sim::WorldMap::LoadFromYaml(world_path);
+  const sim::Pose2D start = sim::StartPoseOf(sim_config, world);
+  const std::vector<Eigen::Vector2i> reachable =
+      ReachableFootprint(world, start, sim_config.sim.motion.robot_radius_m);
+
+  std::cout << "rslam demo: " << world_path << " (" << reachable.size() << " reachable free cells), start ("
+            << start.x << ", " << start.y << ", " << start.theta << "), " << dds << " domain " << domain
+            << ", up to " << options.max_seconds << " s\n"
+            << "output: " << out.string() << "\n";
+
+  // Watch the bus before anything starts, so nothing is missed.
+  bus::BusConfig bus_config;
+  bus_config.dds = dds;
+  bus_config.domain_id = domain;
+  bus_config.robot_id = options.robot;
+  auto participant = bus::Participant::Create(bus_config);
+  DemoMonitor monitor(*participant, options.robot);
+
+  launch::LaunchProfile profile;
+  profile.restart = {.backoff_initial_s = 0.5, .backoff_max_s = 4, .max_restarts = 3};
+  const bool record = RecordCommandAvailable(bin_dir);
+  const fs::path recording = out / "recording.mcap";
+  if (record) {
+    launch::LaunchEntry recorder{.name = "recorder", .command = {"rslam", "record", "-o", recording.string(), "--robot", options.robot}};
+    if (!options.record_images) recorder.command.insert(recorder.command.end(), {"--exclude", "^(sim/camera|camera/image)$"});
+    profile.processes.push_back(recorder);
+  }
+  for (const auto& s : kServices) profile.processes.push_back({.name = s});
+  profile.processes.push_back({.name = "sim"});
+  launch::LaunchOptions launch_options{.bin_dir = bin_dir,
+                                       .robot = options.robot,
+                                       .dds = dds,
+                                       .domain = domain,
+                                       .config = config_path,
+                                       .log_dir = (out / "logs").string(),
+                                       .state_dir = (out / "state").string(),
+                                       .extra_args = extra_args};
+  std::vector<std::string> missing;
+  std::vector<std::string> notes;
+  if (!record) notes.push_back("no recording: `rslam record` is not available in " + bin_dir);
+
+  BlockShutdownSignals();
+  launch::ProcessSupervisor supervisor(profile.restart);
+  std::ofstream events(out / "logs" / "demo.log");
+  supervisor.OnEvent([&events](const std::string& e) { events << e << std::endl; });
+  for (const auto& spec : launch::BuildProcessSpecs(profile, launch_options)) {
+    if (::access(spec.executable.c_str(), X_OK) != 0) {
+      missing.push_back(spec.name);
+      continue;
+    }
+    supervisor.Start(spec);
+  }
+  if (!missing.empty()) {
+    std::string list;
+    for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
+    notes.push_back("not built, so not started: " + list);
+    std::cout << "warning: " << notes.back() << "\n";
+  }
+
+  // Run until exploration completes, time runs out, a process gives up, or Ctrl-C.
+  const bool tty = ::isatty(STDOUT_FILENO) != 0;
+  std::string end_reason = "interrupted";
+  bool complete = false;
+  auto last_print = Clock::now() - std::chrono::hours(1);
+  uint64_t last_grid_version = 0;
+  std::optional<double> live_coverage;
+  TickContext ctx;
+  ctx.tick = [&] {
+    supervisor.Poll();
+    const double elapsed = std::chrono::duration<double>(Clock::now() - wall_start).count();
+    const DemoProgress p = monitor.Progress();
+    const auto now = Clock::now();
+    const bool print = now - last_print >= (tty ? std::chrono::milliseconds(500) : std::chrono::milliseconds(5000));
+    if (print && p.grid_version != last_grid_version) {
+      last_grid_version = p.grid_version;
+      if (auto grid = monitor.LatestGrid()) {
+        try {
+          live_coverage = CompareGridWithWorld(world, reachable, start, *grid, world.resolution()).coverage;
+        } catch (const std::exception&) {
+        }
+      }
+    }
+    if (print) {
+      last_print = now;
+      std::ostringstream line;
+      line << std::fixed << std::setprecision(0) << std::setw(4) << elapsed << " s  frames " << p.frames << "  coverage "
+           << Percent(live_coverage) << "  experiences " << p.experience_count << "  templates " << p.template_count
+           << "  explorer " << StateName(p.explorer_state);
+      if (tty)
+        std::cout << "\r" << std::left << std::setw(100) << line.str() << std::flush;
+      else
+        std::cout << line.str() << std::endl;
+    }
+    if (p.explorer_state == msg::ExplorationState::EXPLORATION_COMPLETE) {
+      complete = true;
+      end_reason = "exploration complete";
+      RequestShutdown();
+    } else if (elapsed >= options.max_seconds) {
+      end_reason = "time limit (" + std::to_string(static_cast<int>(options.max_seconds)) + " s)";
+      RequestShutdown();
+    } else {
+      for (const auto& s : supervisor.Statuses())
+        if (s.gave_up) {
+          end_reason = s.name + " gave up (" + s.last_exit + "; see logs/" + s.name + ".log)";
+          RequestShutdown();
+        }
+    }
+  };
+  WaitForShutdown(std::chrono::milliseconds(100), [](void* a) { static_cast<TickContext*>(a)->tick(); }, &ctx);
+  if (tty) std::cout << "\n";
+  std::cout << "stopping: " << end_reason << std::endl;
+  const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
+  const auto statuses_before_stop = supervisor.Statuses();
+  const bool stopped_cleanly = supervisor.StopAll(std::chrono::milliseconds(8000));
+  if (!stopped_cleanly) notes.push_back("some processes had to be killed at the end (see logs/demo.log)");
+
+  // Results.
+  const DemoObservations seen = monitor.Snapshot();
+  std::optional<GridComparison> grid_check;
+  if (seen.grid) {
+    grid_check = CompareGridWithWorld(world, reachable, start, *seen.grid, world.resolution());
+    WriteMapServerGrid(*seen.grid, out / "grid");
+    cv::imwrite((out / "occupancy.png").string(), RenderOccupancy(*seen.grid, seen.experience_poses));
+  } else {
+    notes.push_back("no occupancy grid was received: no coverage, precision, grid files or occupancy.png");
+  }
+  const auto experience_truth = ExperienceGroundTruth(seen);
+  const std::vector<msg::ExperienceLink> no_links;
+  const LoopClosureCheck loops =
+      CheckLoopClosures(seen.map ? seen.map->links : no_links, experience_truth, kLoopClosureMaxDistanceM);
+  const auto ate = TrajectoryErrorAgainstTruth(seen.experience_poses, seen.ground_truth);
+  const auto dead_reckoning = DeadReckon(seen.odometry);
+  const auto ate_odometry = TrajectoryErrorAgainstTruth(dead_reckoning, seen.ground_truth);
+  cv::imwrite((out / "experience_map.png").string(),
+              RenderExperienceMap(world, seen.ground_truth, seen.map ? &*seen.map : nullptr, ate ? &*ate : nullptr));
+  const uint64_t frames = seen.ground_truth.size();
+  const uint32_t experiences = seen.map ? static_cast<uint32_t>(seen.map->experiences.size()) : seen.experience_count;
+
+  nlohmann::json summary;
+  summary["complete"] = complete;
+  summary["end_reason"] = end_reason;
+  summary["coverage"] = OrNull(grid_check ? std::optional(grid_check->coverage) : std::nullopt);
+  summary["map_precision"] = OrNull(grid_check ? std::optional(grid_check->precision) : std::nullopt);
+  summary["frames"] = frames;
+  summary["templates"] = seen.template_count;
+  summary["experiences"] = experiences;
+  summary["links"] = loops.links;
+  summary["loop_closures"] = loops.loop_closures;
+  summary["loop_closure_precision"] = OrNull(loops.precision);
+  summary["ate_m"] = OrNull(ate ? std::optional(ate->ate_m) : std::nullopt);
+  summary["ate_odometry_m"] = OrNull(ate_odometry ? std::optional(ate_odometry->ate_m) : std::nullopt);
+  summary["wall_s"] = wall_s;
+  summary["dds"] = dds;
+  summary["domain"] = domain;
+  summary["world"] = world_path;
+  summary["start_pose"] = {start.x, start.y, start.theta};
+  summary["odometry"] = options.wheel_odometry ? "wheel" : "visual";
+  if (grid_check)
+    summary["grid"] = {{"reachable_cells", grid_check->reachable_cells},
+                       {"covered_cells", grid_check->covered_cells},
+                       {"marked_cells", grid_check->marked_cells},
+                       {"agreeing_cells", grid_check->agreeing_cells},
+                       {"tolerance_m", world.resolution()}};
+  if (ate)
+    summary["alignment"] = {{"scale", ate->scale}, {"rotation_rad", ate->rotation_rad}, {"pairs", ate->pairs}};
+  if (ate_odometry) summary["odometry_alignment"] = {{"scale", ate_odometry->scale}, {"pairs", ate_odometry->pairs}};
+  nlohmann::json processes = nlohmann::json::object();
+  for (const auto& s : statuses_before_stop)
+    processes[s.name] = {{"restarts", s.restarts}, {"running_at_end", s.running}, {"gave_up", s.gave_up},
+                         {"last_exit", s.last_exit}};
+  summary["processes"] = processes;
+  summary["missing"] = missing;
+  summary["recording"] = record ? nlohmann::json(recording.string()) : nlohmann::json(nullptr);
+  summary["notes"] = notes;
+  std::ofstream(out / "summary.json") << summary.dump(2) << "\n";
+
+  std::ostringstream report;
+  report << "rslam demo: " << (complete ? "exploration complete" : "exploration NOT complete") << " (" << end_reason
+         << ") after " << std::fixed << std::setprecision(0) << wall_s << " s wall, " << frames << " frames ("
+         << std::setprecision(1) << frames * sim_config.sim.motion.time_step_s << " s simulated), " << dds
+         << " domain " << domain << "\n"
+         << "world: " << world_path << ", start (" << std::setprecision(2) << start.x << ", " << start.y << ", "
+         << start.theta << ")\n"
+         << "odometry used by the map: " << (options.wheel_odometry ? "wheel" : "visual (camera only)") << "\n\n"
+         << "coverage            " << Percent(grid_check ? std::optional(grid_check->coverage) : std::nullopt)
+         << "  of the free cells the robot's footprint can reach from the start\n"
+         << "map precision       " << Percent(grid_check ? std::optional(grid_check->precision) : std::nullopt)
+         << "  of the grid's free/occupied cells agree with the world (within one world cell)\n"
+         << "templates           " << seen.template_count << "\n"
+         << "experiences         " << experiences << ", links " << loops.links << ", loop closures "
+         << loops.loop_closures << "\n"
+         << "loop closures right " << Percent(loops.precision) << "  (both experiences within "
+         << kLoopClosureMaxDistanceM << " m in ground truth)\n"
+         << "ATE experience map  " << Metres(ate ? std::optional(ate->ate_m) : std::nullopt)
+         << "  (similarity-aligned to ground truth)\n"
+         << "ATE odometry        " << Metres(ate_odometry ? std::optional(ate_odometry->ate_m) : std::nullopt)
+         << "  (dead reckoning of odometry/velocity, same alignment)\n\n"
+         << "The map frame starts at the robot's start pose; the grid is placed in the world by the known start\n"
+         << "pose for coverage and precision (no alignment).\n";
+  for (const auto& n : notes) report << "note: " << n << "\n";
+  report << "\nfiles: summary.json, report.txt, experience_map.png, occupancy.png, grid.pgm, grid.yaml"
+         << (record ? ", recording.mcap" : "") << ", logs/, state/\n";
+  std::ofstream(out / "report.txt") << report.str();
+  std::cout << "\n" << report.str();
+  return 0;
+}
+
+void RegisterDemoCommand(CLI::App& rslam) {
+  auto* cmd = rslam.add_subcommand(
+      "demo", "a simulated robot explores a room with every service as its own process; writes map, metrics, recording");
+  auto options = std::make_shared<DemoOptions>();
+  cmd->add_option("--out", options->out_dir, "output folder")->capture_default_str();
+  cmd->add_option("--world", options->world, "world map (map_server YAML); default: deploy/worlds/uwb-room.yaml");
+  cmd->add_option("--dds", options->dds, "DDS vendor for every process (default: env RSLAM_DDS, else cyclone)")
+      ->check(CLI::IsMember({"cyclone", "fastdds"}));
+  cmd->add_option("--domain", options->domain, "DDS domain id (default: env RSLAM_DOMAIN, else 17)")
+      ->check(CLI::Range(0, 229));
+  cmd->add_option("--max-seconds", options->max_seconds, "stop after this many seconds even if not complete")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--wheel-odometry", options->wheel_odometry, "map with the wheel odometry instead of visual odometry");
+  cmd->add_flag("--record-images", options->record_images, "also record camera images (large)");
+  cmd->add_option("--config", options->config, "config file for every process (default: deploy/config/demo.yaml)")
+      ->check(CLI::ExistingFile);
+  cmd->callback([options] {
+    int code = 0;
+    try {
+      code = RunDemo(*options);
+    } catch (const ConfigError& e) {
+      std::cerr << "rslam demo: config error: " << e.what() << std::endl;
+      throw CLI::RuntimeError(2);
+    } catch (const std::exception& e) {
+      std::cerr << "rslam demo: " << e.what() << std::endl;
+      throw CLI::RuntimeError(1);
+    }
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace rslam::demo

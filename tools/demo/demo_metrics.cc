@@ -1,0 +1,154 @@
+#include "tools/demo/demo_metrics.h"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace rslam::demo {
+
+sim::Pose2D MapToWorld(const sim::Pose2D& start, double x, double y) {
+  const double c = std::cos(start.theta), s = std::sin(start.theta);
+  return {start.x + c * x - s * y, start.y + s * x + c * y, start.theta};
+}
+
+namespace {
+
+// World point to the map frame.
+Eigen::Vector2d WorldToMap(const sim::Pose2D& start, const Eigen::Vector2d& p) {
+  const double c = std::cos(start.theta), s = std::sin(start.theta);
+  const double dx = p.x() - start.x, dy = p.y() - start.y;
+  return {c * dx + s * dy, -s * dx + c * dy};
+}
+
+// The grid value at a map-frame point, or -1 outside the grid.
+int GridValueAt(const msg::OccupancyGrid& grid, const Eigen::Vector2d& p) {
+  const double gx = (p.x() - grid.origin_x_m) / grid.resolution_m;
+  const double gy = (p.y() - grid.origin_y_m) / grid.resolution_m;
+  if (!(gx >= 0 && gy >= 0 && gx < grid.width && gy < grid.height)) return -1;
+  const size_t i = static_cast<size_t>(gy) * grid.width + static_cast<size_t>(gx);
+  return i < grid.cells.size() ? grid.cells[i] : -1;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, const sim::Pose2D& start,
+                                                double robot_radius_m) {
+  const std::vector<Eigen::Vector2i> centres = world.ReachableFreeCells({start.x, start.y}, robot_radius_m);
+  cv::Mat mask = cv::Mat::zeros(world.height(), world.width(), CV_8U);
+  for (const auto& c : centres) mask.at<uint8_t>(c.y(), c.x()) = 255;
+  const int r = static_cast<int>(std::ceil(robot_radius_m / world.resolution()));
+  if (r > 0) cv::dilate(mask, mask, cv::getStructuringElement(cv::MORPH_ELLIPSE, {2 * r + 1, 2 * r + 1}));
+  std::vector<Eigen::Vector2i> footprint;
+  for (int iy = 0; iy < world.height(); ++iy)
+    for (int ix = 0; ix < world.width(); ++ix)
+      if (mask.at<uint8_t>(iy, ix) && world.Classify({ix, iy}) == sim::CellClass::kFree) footprint.emplace_back(ix, iy);
+  return footprint;
+}
+
+GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable,
+                                    const sim::Pose2D& start, const msg::OccupancyGrid& grid, double tolerance_m) {
+  if (grid.cells.size() != static_cast<size_t>(grid.width) * grid.height || !(grid.resolution_m > 0))
+    throw std::invalid_argument("occupancy grid: cells do not match width x height, or bad resolution");
+  GridComparison out;
+  out.reachable_cells = reachable.size();
+  for (const auto& cell : reachable) {
+    const int v = GridValueAt(grid, WorldToMap(start, world.CellCenter(cell)));
+    out.covered_cells += v >= 0 && v <= kFreeAtMost;
+  }
+  out.coverage = reachable.empty() ? 0.0 : static_cast<double>(out.covered_cells) / reachable.size();
+
+  const int reach = static_cast<int>(std::ceil(tolerance_m / world.resolution()));
+  for (uint32_t gy = 0; gy < grid.height; ++gy) {
+    for (uint32_t gx = 0; gx < grid.width; ++gx) {
+      const int v = grid.cells[static_cast<size_t>(gy) * grid.width + gx];
+      const bool free = v >= 0 && v <= kFreeAtMost;
+      const bool occupied = v >= kOccupiedAtLeast;
+      if (!free && !occupied) continue;
+      ++out.marked_cells;
+      const sim::Pose2D w = MapToWorld(start, grid.origin_x_m + (gx + 0.5) * grid.resolution_m,
+                                       grid.origin_y_m + (gy + 0.5) * grid.resolution_m);
+      const Eigen::Vector2i centre = world.WorldToCell({w.x, w.y});
+      bool agrees = false;
+      for (int dy = -reach; dy <= reach && !agrees; ++dy)
+        for (int dx = -reach; dx <= reach && !agrees; ++dx) {
+          const Eigen::Vector2i c = centre + Eigen::Vector2i(dx, dy);
+          if ((world.CellCenter(c) - Eigen::Vector2d(w.x, w.y)).norm() > tolerance_m + 0.5 * world.resolution() &&
+              (dx != 0 || dy != 0))
+            continue;
+          agrees = free ? world.Classify(c) == sim::CellClass::kFree : world.IsWall(c);
+        }
+      out.agreeing_cells += agrees;
+    }
+  }
+  out.precision = out.marked_cells == 0 ? 0.0 : static_cast<double>(out.agreeing_cells) / out.marked_cells;
+  return out;
+}
+
+std::map<uint32_t, sim::Pose2D> ExperienceGroundTruth(const DemoObservations& seen) {
+  std::map<uint64_t, sim::Pose2D> truth_by_frame;
+  for (const auto& t : seen.ground_truth) truth_by_frame[t.frame_seq] = {t.x, t.y, t.theta};
+  std::map<uint32_t, sim::Pose2D> out;
+  for (const auto& [id, frame] : seen.experience_first_frame) {
+    const auto it = truth_by_frame.find(frame);
+    if (it != truth_by_frame.end()) out[id] = it->second;
+  }
+  return out;
+}
+
+LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
+                                   const std::map<uint32_t, sim::Pose2D>& experience_truth, double max_distance_m) {
+  LoopClosureCheck out;
+  out.links = static_cast<uint32_t>(links.size());
+  for (const auto& link : links) {
+    if (!link.closes_loop) continue;
+    ++out.loop_closures;
+    const auto a = experience_truth.find(link.from_id), b = experience_truth.find(link.to_id);
+    if (a == experience_truth.end() || b == experience_truth.end()) continue;
+    ++out.verified;
+    out.correct += std::hypot(a->second.x - b->second.x, a->second.y - b->second.y) <= max_distance_m;
+  }
+  if (out.verified > 0) out.precision = static_cast<double>(out.correct) / out.verified;
+  return out;
+}
+
+std::vector<FramePose> DeadReckon(std::vector<FrameVelocity> odometry) {
+  std::sort(odometry.begin(), odometry.end(),
+            [](const FrameVelocity& a, const FrameVelocity& b) { return a.frame_seq < b.frame_seq; });
+  std::vector<FramePose> out;
+  out.reserve(odometry.size());
+  double x = 0, y = 0, theta = 0;
+  for (const auto& v : odometry) {
+    if (!out.empty() && v.frame_seq == out.back().frame_seq) continue;  // a duplicate
+    if (std::isfinite(v.vtrans_mps) && std::isfinite(v.vrot_radps) && std::isfinite(v.dt_s)) {
+      theta += v.vrot_radps * v.dt_s;
+      x += v.vtrans_mps * v.dt_s * std::cos(theta);
+      y += v.vtrans_mps * v.dt_s * std::sin(theta);
+    }
+    out.push_back({v.frame_seq, v.stamp_ns, x, y, theta});
+  }
+  return out;
+}
+
+std::optional<eval::TrajectoryError> TrajectoryErrorAgainstTruth(std::span<const FramePose> estimate,
+                                                                 std::span<const FramePose> truth) {
+  auto convert = [](std::span<const FramePose> poses) {
+    std::vector<FramePose> sorted(poses.begin(), poses.end());
+    std::sort(sorted.begin(), sorted.end(), [](const FramePose& a, const FramePose& b) { return a.stamp_ns < b.stamp_ns; });
+    std::vector<eval::StampedPose2D> out;
+    for (const auto& p : sorted) {
+      if (!out.empty() && p.stamp_ns <= out.back().stamp_ns) continue;  // stamps must strictly increase
+      out.push_back({p.stamp_ns, p.x, p.y, p.theta});
+    }
+    return out;
+  };
+  const auto e = convert(estimate), t = convert(truth);
+  try {
+    return eval::AlignAndCompare(e, t, /*with_scale=*/true, std::chrono::milliseconds(1));
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace rslam::demo

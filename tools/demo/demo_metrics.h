@@ -1,0 +1,74 @@
+#pragma once
+// The demo's figures of merit, computed against the simulator's ground truth:
+//   - coverage: share of the world's free cells the robot could reach (its disc's footprint from
+//     the start, robot radius respected) that the occupancy grid marks free;
+//   - map precision: share of the cells the grid marks free or occupied whose class agrees with
+//     the world within a tolerance (walls are occupied or unknown world cells);
+//   - loop-closure precision: share of loop-closing links whose two experiences were created
+//     within a distance of each other in ground truth;
+//   - absolute trajectory errors (tools/eval/trajectory_alignment.h) of the experience map and of
+//     dead-reckoned odometry, each after a 2-D similarity alignment to ground truth.
+// The experience map (and the grid built on it) starts at the robot's start pose: map frame =
+// world frame moved by the start pose. Pure functions of their inputs.
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "rslam/msg/all_messages.h"
+#include "tools/demo/demo_monitor.h"
+#include "tools/eval/trajectory_alignment.h"
+#include "tools/sim/pose2d.h"
+#include "tools/sim/world_map.h"
+
+namespace rslam::demo {
+
+// map_server thresholds on the 0-100 occupancy scale.
+inline constexpr int kFreeAtMost = 19;      // free_thresh 0.196
+inline constexpr int kOccupiedAtLeast = 66; // occupied_thresh 0.65
+
+// Map frame (origin = start pose) to world frame.
+sim::Pose2D MapToWorld(const sim::Pose2D& start, double x, double y);
+
+struct GridComparison {
+  double coverage = 0.0;
+  double precision = 0.0;
+  uint64_t reachable_cells = 0;  // world cells the robot's footprint can reach
+  uint64_t covered_cells = 0;    // ... that the grid marks free
+  uint64_t marked_cells = 0;     // grid cells marked free or occupied
+  uint64_t agreeing_cells = 0;   // ... that agree with the world
+};
+
+// The world cells (sorted, iy then ix) the robot's disc can cover when its centre moves from the
+// start through free space.
+std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, const sim::Pose2D& start,
+                                                double robot_radius_m);
+
+GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable,
+                                    const sim::Pose2D& start, const msg::OccupancyGrid& grid, double tolerance_m);
+
+struct LoopClosureCheck {
+  uint32_t links = 0;
+  uint32_t loop_closures = 0;
+  uint32_t verified = 0;                // both ends have a ground-truth pose
+  uint32_t correct = 0;                 // ... within the distance
+  std::optional<double> precision;      // correct / verified; none without loop closures
+};
+
+// Ground truth of each experience: the true pose at the frame it was first current.
+std::map<uint32_t, sim::Pose2D> ExperienceGroundTruth(const DemoObservations& seen);
+
+LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
+                                   const std::map<uint32_t, sim::Pose2D>& experience_truth, double max_distance_m);
+
+// Dead reckoning of per-frame velocities (frame order), from (0, 0, 0): turn, then drive.
+std::vector<FramePose> DeadReckon(std::vector<FrameVelocity> odometry);
+
+// ATE after a similarity alignment (stamps matched exactly, within 1 ms); none when fewer than
+// two poses pair up or the estimate does not move.
+std::optional<eval::TrajectoryError> TrajectoryErrorAgainstTruth(std::span<const FramePose> estimate,
+                                                                 std::span<const FramePose> truth);
+
+}  // namespace rslam::demo
