@@ -109,10 +109,11 @@ void ApplyCommonQos(Qos& q, const QosSettings& s) {
   q.history().kind = s.keep_all ? dds::KEEP_ALL_HISTORY_QOS : dds::KEEP_LAST_HISTORY_QOS;
   q.history().depth = s.depth;
   q.durability().kind = s.transient_local ? dds::TRANSIENT_LOCAL_DURABILITY_QOS : dds::VOLATILE_DURABILITY_QOS;
-  // Many robots share a keyed topic: the default of 10 instances is too few.
+  // Many robots share a keyed topic: the default of 10 instances is too few. Memory is
+  // allocated as samples arrive (dynamic memory policy), so these are caps, not reservations.
   q.resource_limits().max_instances = 64;
   q.resource_limits().max_samples_per_instance = s.keep_all ? 2000 : s.depth;
-  q.resource_limits().max_samples = 64 * q.resource_limits().max_samples_per_instance;
+  q.resource_limits().max_samples = std::min<int32_t>(64 * q.resource_limits().max_samples_per_instance, 50'000'000);
   q.resource_limits().allocated_samples = 16;
   q.endpoint().history_memory_policy = rtps::DYNAMIC_REUSABLE_MEMORY_MODE;
 }

@@ -8,6 +8,8 @@ QosSettings SettingsOf(QosPreset preset) {
       return {.reliable = true, .keep_all = false, .depth = 8, .transient_local = false, .max_blocking_ms = 100};
     case QosPreset::kStream:
       return {.reliable = true, .keep_all = true, .depth = 1, .transient_local = false, .max_blocking_ms = 10000};
+    case QosPreset::kLog:
+      return {.reliable = true, .keep_all = false, .depth = 200'000, .transient_local = true, .max_blocking_ms = 10000};
     case QosPreset::kState:
       return {.reliable = true, .keep_all = false, .depth = 1, .transient_local = true, .max_blocking_ms = 1000};
   }
@@ -18,6 +20,7 @@ std::string_view PresetName(QosPreset preset) {
   switch (preset) {
     case QosPreset::kSensor: return "sensor";
     case QosPreset::kStream: return "stream";
+    case QosPreset::kLog: return "log";
     case QosPreset::kState: return "state";
   }
   return "?";

@@ -15,6 +15,9 @@ enum class QosPreset {
   // Odometry, views, actions, commands: reliable, keep-all, volatile. Nothing is lost; a slow
   // reader applies back-pressure (the writer blocks up to max_blocking_ms).
   kStream,
+  // A replayable log (pose-cell actions): reliable, keep-last 200,000 (hours of frames),
+  // transient-local, so a consumer that restarts receives every entry it missed.
+  kLog,
   // Maps, grids, status: reliable, transient-local, keep-last 1 per instance (robot), so a
   // service that (re)starts gets the latest at once.
   kState,

@@ -21,7 +21,7 @@ inline constexpr Topic<msg::Image> kCameraImage{"camera/image", QosPreset::kSens
 inline constexpr Topic<msg::Velocity> kOdometryVelocity{"odometry/velocity", QosPreset::kStream};
 inline constexpr Topic<msg::Velocity> kWheelOdometry{"robot/wheel_odometry", QosPreset::kStream};
 inline constexpr Topic<msg::ViewTemplate> kTemplatesView{"templates/view", QosPreset::kStream};
-inline constexpr Topic<msg::PoseCellAction> kPoseCellsAction{"pose_cells/action", QosPreset::kStream};
+inline constexpr Topic<msg::PoseCellAction> kPoseCellsAction{"pose_cells/action", QosPreset::kLog};
 inline constexpr Topic<msg::ExperiencePose> kExperienceMapPose{"experience_map/pose", QosPreset::kStream};
 inline constexpr Topic<msg::ExperienceMap> kExperienceMapMap{"experience_map/map", QosPreset::kState};
 inline constexpr Topic<msg::ObstacleProfile> kOccupancyProfile{"occupancy/profile", QosPreset::kStream};
