@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -148,28 +149,41 @@ class OccupancyNode::Mapper {
   void OnMap(const msg::ExperienceMap& map) {
     std::lock_guard lock(mutex_);
     if (stopped_) return;
-    std::unordered_map<uint64_t, Pose2D> poses;
-    poses.reserve(map.experiences.size());
+    PendingCorrection correction;
+    correction.map_version = map.map_version;
+    correction.poses.reserve(map.experiences.size());
     for (const msg::Experience& e : map.experiences) {
       if (!std::isfinite(e.x_m) || !std::isfinite(e.y_m) || !std::isfinite(e.theta_rad)) {
         context_.Reject("map", "experience " + std::to_string(e.id) + " has a non-finite pose");
         return;
       }
-      poses[e.id] = {e.x_m, e.y_m, e.theta_rad};
+      correction.poses[e.id] = {e.x_m, e.y_m, e.theta_rad};
     }
     latest_map_version_ = std::max(latest_map_version_, map.map_version);
     if (rebuilt_version_ && map.map_version <= *rebuilt_version_) return;
-    rebuilt_version_ = map.map_version;
-    if (!AnchorsMoved(poses)) return;
-    const auto lookup = [&poses](uint64_t id) -> std::optional<Pose2D> {
-      if (auto it = poses.find(id); it != poses.end()) return it->second;
+    if (pending_correction_ && map.map_version <= pending_correction_->map_version) return;
+    pending_correction_ = std::move(correction);
+    // A rebuild replays every profile: while the map keeps correcting, do it at most once every
+    // rebuild_at_most_every_n_frames frames (the newest correction waits for the next frame).
+    if (frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames) ApplyPendingCorrection();
+  }
+
+  void ApplyPendingCorrection() {
+    if (!pending_correction_) return;
+    const PendingCorrection correction = std::move(*pending_correction_);
+    pending_correction_.reset();
+    rebuilt_version_ = correction.map_version;
+    if (!AnchorsMoved(correction.poses)) return;
+    const auto lookup = [&correction](uint64_t id) -> std::optional<Pose2D> {
+      if (auto it = correction.poses.find(id); it != correction.poses.end()) return it->second;
       return std::nullopt;
     };
     const size_t moved = map_.Rebuild(lookup);
-    spdlog::info("map version {}: rebuilt the grid ({} of {} profiles moved)", map.map_version, moved,
+    frames_since_rebuild_ = 0;
+    spdlog::info("map version {}: rebuilt the grid ({} of {} profiles moved)", correction.map_version, moved,
                  map_.profiles().size());
     dirty_ = true;
-    PublishGrid(last_header_, map.map_version);
+    PublishGrid(last_header_, correction.map_version);
   }
 
   bool AnchorsMoved(const std::unordered_map<uint64_t, Pose2D>& poses) const {
@@ -202,6 +216,9 @@ class OccupancyNode::Mapper {
     context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
     profile_pub_->Publish(
         ToMessage(pose.header, map_.profiles().back(), static_cast<float>(config_.sensor.reliable_range_m)));
+    if (frames_since_rebuild_ < std::numeric_limits<int>::max() / 2) ++frames_since_rebuild_;
+    if (pending_correction_ && frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames)
+      ApplyPendingCorrection();  // publishes the grid when it rebuilds
     if (++frames_since_grid_ >= config_.grid_publish_every_n_frames) PublishGrid(pose.header, latest_map_version_);
   }
 
@@ -284,6 +301,12 @@ class OccupancyNode::Mapper {
   uint64_t reported_dropped_ = 0;
   uint64_t latest_map_version_ = 0;
   std::optional<uint64_t> rebuilt_version_;
+  struct PendingCorrection {
+    uint64_t map_version = 0;
+    std::unordered_map<uint64_t, Pose2D> poses;
+  };
+  std::optional<PendingCorrection> pending_correction_;
+  int frames_since_rebuild_ = std::numeric_limits<int>::max() / 2;
   msg::Header last_header_;
   int frames_since_grid_ = 0;
   bool dirty_ = true;  // a fresh start saves (an empty map) too, so a restart sees the file

@@ -58,6 +58,7 @@ struct OccupancyNodeConfig {
   int join_buffer_frames = 30;          // images / poses waiting for their partner, per side
   double rebuild_min_shift_m = 0.005;   // experience moves smaller than this do not rebuild
   double rebuild_min_turn_rad = 0.002;
+  int rebuild_at_most_every_n_frames = 10;  // a rebuild replays every profile: bound how often
   bool export_maps_on_shutdown = true;  // grid.pgm, grid.yaml, occupancy.png in the state dir
 
   template <class V>
@@ -72,6 +73,8 @@ struct OccupancyNodeConfig {
     v("rebuild_min_shift_m", rebuild_min_shift_m,
       "a corrected map rebuilds the grid only if an experience moved at least this far (m)");
     v("rebuild_min_turn_rad", rebuild_min_turn_rad, "... or turned at least this much (rad)");
+    v("rebuild_at_most_every_n_frames", rebuild_at_most_every_n_frames,
+      "while the map keeps correcting, rebuild the grid at most once every this many frames");
     v("export_maps_on_shutdown", export_maps_on_shutdown,
       "write grid.pgm, grid.yaml and occupancy.png into the state dir on shutdown");
   }
@@ -82,6 +85,7 @@ struct OccupancyNodeConfig {
     Nested(sensor, "sensor");
     Require(grid_publish_every_n_frames >= 1, "grid_publish_every_n_frames", "must be >= 1");
     Require(join_buffer_frames >= 1 && join_buffer_frames <= 10000, "join_buffer_frames", "must be 1..10000");
+    Require(rebuild_at_most_every_n_frames >= 0, "rebuild_at_most_every_n_frames", "must be >= 0");
     Require(std::isfinite(rebuild_min_shift_m) && rebuild_min_shift_m >= 0, "rebuild_min_shift_m",
             "must be >= 0");
     Require(std::isfinite(rebuild_min_turn_rad) && rebuild_min_turn_rad >= 0, "rebuild_min_turn_rad",
