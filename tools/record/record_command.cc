@@ -287,7 +287,8 @@ void RegisterInfo(CLI::App& rslam) {
         std::cout << FormatRecordingInfo(info);
       }
     } catch (const mcap::McapError& e) {
-      std::string what = path + ": " + e.what();
+      std::string what = e.what();
+      if (what.rfind(path, 0) != 0) what = path + ": " + what;
       if (what.find("RecoverMcap") != std::string::npos)
         what += "\n  repair it with: rslam info " + path + " --recover REPAIRED.mcap";
       Fail("info", what);

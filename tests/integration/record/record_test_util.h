@@ -27,6 +27,7 @@
 #include "common/bus/message_registry.h"
 #include "common/bus/participant.h"
 #include "common/bus/typed_cdr.h"
+#include "rslam/msg/all_messages.h"
 
 extern char** environ;
 
