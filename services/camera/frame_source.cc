@@ -28,15 +28,18 @@ class ImageSequence final : public FrameSource {
 
   std::optional<Frame> Next() override {
     if (next_ >= files_.size()) return std::nullopt;
+    // The index advances even when the file cannot be read: the caller may skip a bad file and
+    // go on, and frame numbers (and stamps) stay tied to file positions.
+    const std::size_t index = next_++;
+    const std::string& file = files_[index];
     Frame f;
-    f.seq = next_;
-    f.stamp_ns = start_ns_ + static_cast<int64_t>(static_cast<double>(next_) * period_ns_);
-    f.name = fs::path(files_[next_]).filename().string();
-    f.image = cv::imread(files_[next_], cv::IMREAD_UNCHANGED);
-    if (f.image.empty()) throw std::runtime_error(files_[next_] + ": cannot read image");
-    if (f.image.depth() != CV_8U) throw std::runtime_error(files_[next_] + ": not an 8-bit image");
-    if (f.image.channels() == 4) f.image = cv::imread(files_[next_], cv::IMREAD_COLOR);  // drop alpha
-    ++next_;
+    f.seq = index;
+    f.stamp_ns = start_ns_ + static_cast<int64_t>(static_cast<double>(index) * period_ns_);
+    f.name = fs::path(file).filename().string();
+    f.image = cv::imread(file, cv::IMREAD_UNCHANGED);
+    if (f.image.empty()) throw std::runtime_error(file + ": cannot read image");
+    if (f.image.depth() != CV_8U) throw std::runtime_error(file + ": not an 8-bit image");
+    if (f.image.channels() == 4) f.image = cv::imread(file, cv::IMREAD_COLOR);  // drop alpha
     return f;
   }
   int64_t size() const override { return static_cast<int64_t>(files_.size()); }

@@ -25,7 +25,7 @@ class FrameSource {
  public:
   virtual ~FrameSource() = default;
   // The next frame, or nullopt at the end of a finite source. Throws std::runtime_error on a
-  // read failure (an unreadable image file names the file).
+  // read failure (an unreadable image file names the file; the next call goes on with the next file).
   virtual std::optional<Frame> Next() = 0;
   // Frames in a finite source, or -1 when unknown (live devices).
   virtual int64_t size() const = 0;
