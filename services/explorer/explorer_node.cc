@@ -276,12 +276,12 @@ class ExplorerNode::Controller {
     if (command.kind != MotionCommand::Kind::kStop) awaiting_ = Outstanding{out.command_seq, command, Clock::now()};
   }
 
-  void Complete(const std::string& reason) {
+  void Complete(std::string reason) {  // by value: it often comes from plan_, reset below
     Send({MotionCommand::Kind::kStop});
     state_ = msg::ExplorationState::EXPLORATION_COMPLETE;
-    reason_ = reason;
     plan_.reset();
     spdlog::info("exploration complete: {}", reason);
+    reason_ = std::move(reason);
     PublishStatusIfChanged();
   }
 
