@@ -1,0 +1,89 @@
+#include "tools/run/ratslam_config.h"
+
+#include <array>
+#include <cstdlib>
+#include <string_view>
+
+#include "common/config/config_error.h"
+#include "common/config/config_loader.h"
+
+namespace rslam::run {
+
+namespace {
+
+constexpr std::array<std::string_view, 4> kCoreSections = {"odometry", "templates", "pose_cells",
+                                                            "experience_map"};
+constexpr std::array<std::string_view, 5> kOtherSections = {"bus", "service", "camera", "occupancy",
+                                                             "explorer"};
+
+bool Contains(const auto& list, const std::string& name) {
+  for (std::string_view s : list) {
+    if (s == name) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+RatSlamConfig RatSlamConfigFromYaml(const YAML::Node& root) {
+  if (root && !root.IsNull()) {
+    if (!root.IsMap()) throw ConfigError("<top level>", "expected a mapping of sections");
+    for (const auto& kv : root) {
+      const std::string section = kv.first.as<std::string>();
+      if (!Contains(kCoreSections, section) && !Contains(kOtherSections, section)) {
+        throw ConfigError(section, "unknown section (expected odometry, templates, pose_cells, experience_map)");
+      }
+    }
+  }
+  RatSlamConfig config;
+  const YAML::Node document = root ? root : YAML::Node(YAML::NodeType::Map);
+  LoadConfigSection(document, "odometry", config.odometry);
+  LoadConfigSection(document, "templates", config.templates);
+  LoadConfigSection(document, "pose_cells", config.pose_cells);
+  LoadConfigSection(document, "experience_map", config.experience_map);
+  return config;
+}
+
+void MergeYaml(YAML::Node& base, const YAML::Node& overlay) {
+  if (!overlay || overlay.IsNull()) return;
+  if (!overlay.IsMap() || !base.IsMap()) {
+    base = YAML::Clone(overlay);
+    return;
+  }
+  for (const auto& kv : overlay) {
+    const std::string key = kv.first.as<std::string>();
+    YAML::Node child = base[key];
+    if (child.IsDefined() && child.IsMap() && kv.second.IsMap()) {
+      MergeYaml(child, kv.second);
+    } else {
+      base[key] = YAML::Clone(kv.second);
+    }
+  }
+}
+
+std::filesystem::path FindPreset(const std::string& name, const std::filesystem::path& fallback_dir) {
+  if (name.empty() || name.find('/') != std::string::npos) {
+    throw ConfigError("preset", "'" + name + "' is not a preset name (use --config FILE for a file)");
+  }
+  std::vector<std::filesystem::path> folders;
+  if (const char* env = std::getenv("RSLAM_PRESET_DIR"); env && *env) folders.emplace_back(env);
+  if (!fallback_dir.empty()) folders.push_back(fallback_dir);
+  std::string tried;
+  for (const auto& folder : folders) {
+    const std::filesystem::path candidate = folder / (name + ".yaml");
+    if (std::filesystem::is_regular_file(candidate)) return candidate;
+    tried += (tried.empty() ? "" : ", ") + candidate.string();
+  }
+  throw ConfigError("preset", "no preset '" + name + "' (looked for " + (tried.empty() ? "nothing" : tried) + ")");
+}
+
+YAML::Node ComposeRunYaml(const std::filesystem::path& preset_file, const std::string& config_file,
+                          const std::vector<std::string>& overrides) {
+  YAML::Node root(YAML::NodeType::Map);
+  if (!preset_file.empty()) MergeYaml(root, LoadYamlFile(preset_file.string()));
+  if (!config_file.empty()) MergeYaml(root, LoadYamlFile(config_file));
+  for (const std::string& assignment : overrides) ApplyOverride(root, assignment);
+  return root;
+}
+
+}  // namespace rslam::run

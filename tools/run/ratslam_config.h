@@ -1,0 +1,44 @@
+#pragma once
+// The configuration of the whole RatSLAM core as one YAML document: the sections the four
+// services read (odometry, templates, pose_cells, experience_map), so a preset file
+// (deploy/presets/<name>.yaml) configures `rslam run` and the distributed services alike.
+
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "services/experience_map/experience_map_config.h"
+#include "services/odometry/visual_odometry_config.h"
+#include "services/pose_cells/pose_cell_config.h"
+#include "services/templates/template_config.h"
+
+namespace rslam::run {
+
+struct RatSlamConfig {
+  odometry::VisualOdometryConfig odometry;
+  templates::TemplateConfig templates;
+  pose_cells::PoseCellConfig pose_cells;
+  experience_map::ExperienceMapConfig experience_map;
+};
+
+// Fills every section from root over the defaults and validates. Throws ConfigError naming the
+// key for unknown keys, wrong types and bad values, and naming the section for an unknown
+// top-level section. Sections that configure other parts of the system (bus, service, camera,
+// occupancy, explorer) are accepted and ignored, so a service config file can be reused.
+RatSlamConfig RatSlamConfigFromYaml(const YAML::Node& root);
+
+// Overlays `overlay` onto `base` (maps merged key by key, everything else replaced).
+void MergeYaml(YAML::Node& base, const YAML::Node& overlay);
+
+// A preset name -> its file: $RSLAM_PRESET_DIR/<name>.yaml, then <fallback_dir>/<name>.yaml.
+// Throws ConfigError("preset", ...) listing the places it looked.
+std::filesystem::path FindPreset(const std::string& name, const std::filesystem::path& fallback_dir);
+
+// The YAML document of `rslam run`: the preset (when not empty), then the config file (when not
+// empty) over it, then each "section.key=value" override. Throws ConfigError.
+YAML::Node ComposeRunYaml(const std::filesystem::path& preset_file, const std::string& config_file,
+                          const std::vector<std::string>& overrides);
+
+}  // namespace rslam::run

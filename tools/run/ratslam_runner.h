@@ -1,0 +1,113 @@
+#pragma once
+// The four RatSLAM stages in one process, one camera frame at a time: exactly the calls the
+// distributed services make, in the same order and with the same arguments, so `rslam run` on a
+// recording builds the same map as the services on the bus.
+//
+// Per frame (ProcessFrame):
+//   grey     = the frame as CV_8UC1 (cv::cvtColor BGR2GRAY / BGRA2GRAY; mono as is)
+//   velocity = VisualOdometry::Update(grey, dt)            (odometry service)
+//   view     = TemplateLibrary::MatchOrLearn(grey)          (templates service)
+//   action   = PoseCellNetwork::ProcessFrame(velocity, dt, view)   (pose-cell service, joined by frame)
+//   ExperienceMap::Integrate(velocity, dt); Apply(action)   (experience-map service, every frame)
+// dt is the difference of consecutive frame stamps. The first frame has no previous frame: it
+// reports zero velocity and dt 0 (the odometry still sees it, to keep its profile).
+//
+// Deterministic: the map depends only on the frames and their stamps. Stage times are measured
+// (steady clock) but never influence the result.
+
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <set>
+#include <utility>
+
+#include "services/experience_map/experience_map.h"
+#include "services/odometry/visual_odometry.h"
+#include "services/pose_cells/pose_cell_network.h"
+#include "services/templates/template_library.h"
+#include "tools/run/ratslam_config.h"
+
+namespace rslam::run {
+
+struct StageMicroseconds {
+  double odometry = 0.0;  // includes the grey conversion
+  double templates = 0.0;
+  double pose_cells = 0.0;
+  double experience_map = 0.0;
+  double total() const { return odometry + templates + pose_cells + experience_map; }
+};
+
+// What one frame did in each stage.
+struct FrameRecord {
+  uint64_t frame_index = 0;  // 0, 1, 2, ... in processing order
+  int64_t stamp_ns = 0;
+  double dt_s = 0.0;         // 0 for the first frame
+  odometry::Velocity velocity;
+  templates::ViewMatch view{};
+  pose_cells::Action action;
+  StageMicroseconds micros;
+};
+
+// How a final relaxation ended.
+struct RelaxResult {
+  int sweeps = 0;
+  bool converged = false;
+  double last_change_m = 0.0;  // largest experience move (m or rad) in the last batch of sweeps
+};
+
+// The action as the experience map receives it (same fields as the pose cells' action).
+experience_map::ExperienceAction ToExperienceAction(const pose_cells::Action& action);
+
+// The frame as CV_8UC1: BGR (3 channels) and BGRA (4) converted, grey returned as is (no copy).
+// Throws std::invalid_argument for an empty image, a depth other than 8 bits, or 2 channels.
+cv::Mat ToGrey(const cv::Mat& image);
+
+class RatSlamRunner {
+ public:
+  explicit RatSlamRunner(const RatSlamConfig& config);  // throws ConfigError on a bad config
+  RatSlamRunner(const RatSlamRunner&) = delete;
+  RatSlamRunner& operator=(const RatSlamRunner&) = delete;
+
+  // One camera frame through the four stages. Throws std::invalid_argument (nothing changed)
+  // on a bad image (see ToGrey; a size change mid-stream) or a stamp not after the previous one.
+  FrameRecord ProcessFrame(const cv::Mat& image, int64_t stamp_ns);
+
+  // The pose-cell and experience-map half of a frame, from a velocity and a view the caller
+  // measured (for tools and benchmarks that prefill a map without images; the template library
+  // must have learnt view.template_id already). Returns the pose cells' action.
+  pose_cells::Action IntegrateMeasurements(const odometry::Velocity& velocity, double dt_s,
+                                           const templates::ViewMatch& view);
+  // Learns a view as a new template without a frame (prefilling); report it to
+  // IntegrateMeasurements as {id, is_new = true} on the next step.
+  uint32_t LearnTemplate(const cv::Mat& image);
+
+  // Full correction sweeps (000 eq. 3) in batches until no experience moves more than
+  // tolerance between batches, or max_sweeps.
+  RelaxResult RelaxToConvergence(double tolerance = 1e-6, int max_sweeps = 100000);
+
+  const odometry::VisualOdometry& odometry() const { return odometry_; }
+  const templates::TemplateLibrary& templates() const { return templates_; }
+  const pose_cells::PoseCellNetwork& pose_cells() const { return pose_cells_; }
+  const experience_map::ExperienceMap& experience_map() const { return map_; }
+  uint64_t frames_processed() const { return frames_; }
+  // kLink actions applied: places recognised and linked (loop closures).
+  uint64_t loop_closures() const { return loop_closures_; }
+  // (from, to) of every link a loop closure created.
+  const std::set<std::pair<uint32_t, uint32_t>>& loop_closure_links() const { return loop_closure_links_; }
+
+ private:
+  void ApplyToMap(const odometry::Velocity& velocity, double dt_s, const pose_cells::Action& action);
+
+  const RatSlamConfig config_;
+  odometry::VisualOdometry odometry_;
+  templates::TemplateLibrary templates_;
+  pose_cells::PoseCellNetwork pose_cells_;
+  experience_map::ExperienceMap map_;
+  uint64_t frames_ = 0;
+  bool has_previous_stamp_ = false;
+  int64_t previous_stamp_ns_ = 0;
+  uint64_t loop_closures_ = 0;
+  std::set<std::pair<uint32_t, uint32_t>> loop_closure_links_;
+};
+
+}  // namespace rslam::run
