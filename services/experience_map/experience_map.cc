@@ -184,6 +184,7 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
           changed = true;
         } else if (link_kind) {
           AddLink(current_, to, o);
+          links_.back().closes_loop = true;
           changed = true;
         }
       }
@@ -194,6 +195,7 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
   }
   if (a.kind != ExperienceAction::Kind::kNone) next_sequence_ = a.sequence + 1;
   if (config_.exp_relax_budget_links == 0) {
+    last_correction_ = 0.0;
     if (a.kind != ExperienceAction::Kind::kNone) Relax(config_.exp_loops);
   } else {
     CorrectBudgeted();
@@ -245,9 +247,11 @@ void ExperienceMap::SeedLocalRegion(uint32_t a, uint32_t b) {
 int ExperienceMap::CorrectBudgeted() {
   int budget = config_.exp_relax_budget_links;
   int relaxed = 0;
+  last_correction_ = 0.0;
   if (!local_region_.empty()) {
     double largest = 0.0;
     for (uint32_t li : local_region_) largest = std::max(largest, RelaxLink(links_[li]));
+    last_correction_ = largest;
     relaxed += static_cast<int>(local_region_.size());
     budget -= static_cast<int>(local_region_.size());
     if (largest <= config_.exp_relax_tolerance) local_region_.clear();
@@ -263,7 +267,7 @@ int ExperienceMap::CorrectBudgeted() {
     }
     const auto& out = links_from_[sweep_experience_];
     if (sweep_link_ < out.size()) {
-      RelaxLink(links_[out[sweep_link_]]);
+      last_correction_ = std::max(last_correction_, RelaxLink(links_[out[sweep_link_]]));
       ++sweep_link_;
       ++relaxed;
     } else {
@@ -276,9 +280,10 @@ int ExperienceMap::CorrectBudgeted() {
 }
 
 void ExperienceMap::Relax(int iterations) {
+  last_correction_ = 0.0;
   for (int i = 0; i < iterations; ++i) {
     for (uint32_t e = 0; e < experiences_.size(); ++e) {
-      for (uint32_t li : links_from_[e]) RelaxLink(links_[li]);
+      for (uint32_t li : links_from_[e]) last_correction_ = std::max(last_correction_, RelaxLink(links_[li]));
     }
   }
   sweep_experience_ = 0;
@@ -364,7 +369,10 @@ void ExperienceMap::MergeFrom(const ExperienceMap& other, const std::vector<MapA
     links_to_[copy.to_id].push_back(static_cast<uint32_t>(links_.size() - 1));
   }
   (void)link_offset;
-  for (const MapAnchor& an : anchors) AddLink(an.this_id, an.other_id + offset, {0.0, 0.0, 0.0, 0.0});
+  for (const MapAnchor& an : anchors) {
+    AddLink(an.this_id, an.other_id + offset, {0.0, 0.0, 0.0, 0.0});
+    links_.back().closes_loop = true;  // the two maps are joined where a place is recognised
+  }
   if (!anchors.empty()) SeedLocalRegion(anchors[0].this_id, anchors[0].other_id + offset);
 }
 
@@ -407,6 +415,7 @@ proto::ExperienceMap ExperienceMap::Save() const {
     p->set_facing_rad(l.facing_rad);
     p->set_travel_time_s(l.travel_time_s);
     p->set_traversals(l.traversals);
+    p->set_closes_loop(l.closes_loop);
   }
   m.set_has_current(has_current_);
   m.set_current_id(current_);
@@ -462,7 +471,7 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   for (uint32_t i = 0; i < nl; ++i) {
     const auto& p = m.links(i);
     links_.push_back({p.from_id(), p.to_id(), p.d_m(), p.heading_rad(), p.facing_rad(), p.travel_time_s(),
-                      std::max<uint32_t>(1, p.traversals())});
+                      std::max<uint32_t>(1, p.traversals()), p.closes_loop()});
     links_from_[p.from_id()].push_back(i);
     links_to_[p.to_id()].push_back(i);
   }

@@ -47,6 +47,7 @@ struct Link {
   double facing_rad = 0.0;
   double travel_time_s = 0.0;
   uint32_t traversals = 1;
+  bool closes_loop = false;  // made by recognising a known place (kLink), not by a kCreate
 };
 
 struct Pose2 {
@@ -78,6 +79,9 @@ class ExperienceMap {
 
   // One frame's correction budget only (Apply calls it). Returns link relaxations done.
   int CorrectBudgeted();
+  // Largest change (m or rad) one link relaxation made during the last Apply, CorrectBudgeted
+  // or Relax call: 0 when the map did not move.
+  double last_correction() const { return last_correction_; }
   // `iterations` full sweeps over all links (OpenRatSLAM iterate()); resets the sliced sweep to
   // a sweep boundary and drops the local region.
   void Relax(int iterations);
@@ -133,6 +137,7 @@ class ExperienceMap {
   uint32_t sweep_link_ = 0;
   std::vector<uint32_t> local_region_;  // link indices, breadth-first from the latest closure
   uint64_t next_sequence_ = 0;
+  double last_correction_ = 0.0;
 };
 
 }  // namespace rslam::experience_map

@@ -655,6 +655,81 @@ Action PoseCellNetwork::ProcessFrame(double vtrans_mps, double vrot_radps, doubl
   return DecideAction();
 }
 
+Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_radps, double dt_s) {
+  ValidateFrame(vtrans_mps, vrot_radps, dt_s, 0, 0.0);
+  Step(vtrans_mps, vrot_radps, dt_s);
+  ++frames_processed_;
+  // The view is unchanged: only the pose-cell distance can make a new experience.
+  previous_template_ = current_template_;
+  has_previous_template_ = has_current_template_;
+  return DecideAction();
+}
+
+void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& experiences,
+                                         const std::vector<std::pair<uint32_t, uint32_t>>& links,
+                                         uint32_t current_experience_id) {
+  auto fail = [](const std::string& why) { throw std::invalid_argument("pose cells: adopted map: " + why); };
+  const uint32_t n = static_cast<uint32_t>(experiences.size());
+  uint32_t template_end = static_cast<uint32_t>(views_.size());
+  for (const MapExperience& e : experiences) {
+    const PoseCellPosition& c = e.cell;
+    if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.th) || c.x < 0 || c.x >= dim_xy_ ||
+        c.y < 0 || c.y >= dim_xy_ || c.th < 0 || c.th >= dim_th_) {
+      fail("experience cell out of range");
+    }
+    if (e.template_id == kNoExperience) fail("template id out of range");
+    template_end = std::max(template_end, e.template_id + 1);
+  }
+  for (const auto& [a, b] : links) {
+    if (a >= n || b >= n) fail("link to unknown experience");
+  }
+  if (n > 0 && current_experience_id >= n) fail("current experience unknown");
+
+  // Valid: commit. Associations for templates learnt while this network was down.
+  std::vector<const PoseCellPosition*> first_cell(template_end, nullptr);
+  for (const MapExperience& e : experiences) {
+    if (!first_cell[e.template_id]) first_cell[e.template_id] = &e.cell;
+  }
+  const PoseCellPosition fallback = n > 0 ? experiences[current_experience_id].cell : best_;
+  for (uint32_t t = static_cast<uint32_t>(views_.size()); t < template_end; ++t) {
+    // A template without experiences takes the cell of the next template that has one.
+    const PoseCellPosition* cell = nullptr;
+    for (uint32_t u = t; u < template_end && !cell; ++u) cell = first_cell[u];
+    const PoseCellPosition& p = cell ? *cell : fallback;
+    views_.push_back({p.x, p.y, p.th, config_.vt_active_decay, view_updates_, {}});
+  }
+  for (ViewAssociation& v : views_) v.experience_ids.clear();
+  experiences_.clear();
+  for (uint32_t id = 0; id < n; ++id) {
+    const MapExperience& e = experiences[id];
+    experiences_.push_back({e.cell.x, e.cell.y, e.cell.th, e.template_id});
+    views_[e.template_id].experience_ids.push_back(id);
+  }
+  links_of_.assign(n, {});
+  for (const auto& [a, b] : links) {
+    if (a == b || Linked(a, b)) continue;
+    links_of_[a].push_back(b);
+    links_of_[b].push_back(a);
+  }
+  has_current_experience_ = n > 0;
+  current_experience_ = n > 0 ? current_experience_id : 0;
+  if (n == 0) return;
+  const ExperienceCell& cur = experiences_[current_experience_];
+  current_template_ = previous_template_ = cur.template_id;
+  has_current_template_ = has_previous_template_ = true;
+  view_delta_th_cells_ = 0.0;
+  // The packet restarts where the robot last was, as the constructor starts it in the centre.
+  for (int t : ts_.index) {
+    for (int y : ys_.index) rows_act_[Row(y, t)] = RowExtent{};
+  }
+  ZeroRegion(activity_, xs_, ys_, ts_);
+  for (AxisSet* a : {&xs_, &ys_}) a->Reset(dim_xy_);
+  ts_.Reset(dim_th_);
+  InjectEnergy(static_cast<int>(std::lround(cur.pc_x)), static_cast<int>(std::lround(cur.pc_y)),
+               static_cast<int>(std::lround(cur.pc_th)), 1.0);
+  best_ = {cur.pc_x, cur.pc_y, cur.pc_th};
+}
+
 // ---------------------------------------------------------------------------------------------
 // Access and persistence
 

@@ -39,6 +39,13 @@ struct PoseCellPosition {
   double th = 0.0;  // cells, [0, dim_th)
 };
 
+// An experience as the experience map knows it (its id is its index in the map's list): what a
+// restarted pose-cell service adopts to resynchronise (AdoptExperienceMap).
+struct MapExperience {
+  uint32_t template_id = 0;
+  PoseCellPosition cell;  // pose-cell position the experience was created at
+};
+
 class PoseCellNetwork {
  public:
   explicit PoseCellNetwork(const PoseCellConfig& config);
@@ -52,6 +59,23 @@ class PoseCellNetwork {
   // velocities or angle, or a template id beyond the next expected id.
   Action ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s, uint32_t template_id,
                       bool template_is_new, double relative_angle_rad);
+
+  // A frame whose view never arrived (the template learner restarted): path integration only.
+  // The current view counts as unchanged, so nothing is injected and no view change drives the
+  // decision. Throws std::invalid_argument (state unchanged) as ProcessFrame.
+  Action ProcessFrameWithoutView(double vtrans_mps, double vrot_radps, double dt_s);
+
+  // Resynchronisation after a restart. The experience map is the authority on experiences: it
+  // may have applied actions this network never saved (it restarted from an older state) or,
+  // when actions were lost, fewer. This replaces the experience bookkeeping (experiences, their
+  // template associations, known links, current experience) with the map's, so the next
+  // created id is the map's next id. Templates this network has not seen yet are associated
+  // with the cell of their first experience (their learning cell, 001 eq. 3 without offset);
+  // the activity packet is moved to the current experience's cell, where the robot last was.
+  // Throws std::invalid_argument (network unchanged) on out-of-range cells or ids.
+  void AdoptExperienceMap(const std::vector<MapExperience>& experiences,
+                          const std::vector<std::pair<uint32_t, uint32_t>>& links,
+                          uint32_t current_experience_id);
 
   // Finer steps (ProcessFrame = InjectView, Step, DecideAction).
   void InjectView(uint32_t template_id, double relative_angle_rad, bool is_new);

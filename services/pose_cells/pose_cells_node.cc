@@ -1,0 +1,329 @@
+#include "services/pose_cells/pose_cells_node.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common/persistence/state_file.h"
+#include "services/pose_cells/pose_cell_network.h"
+#include "services/pose_cells/proto/pose_cells_node_state.pb.h"
+#include "services/pose_cells/velocity_view_joiner.h"
+
+namespace rslam::pose_cells {
+
+namespace {
+
+constexpr const char* kStateKind = "rslam.pose_cells.NodeState";
+constexpr uint32_t kStateVersion = 1;
+
+msg::ActionKind ToMessageKind(Action::Kind kind) {
+  switch (kind) {
+    case Action::Kind::kCreate: return msg::ActionKind::ACTION_CREATE;
+    case Action::Kind::kLink: return msg::ActionKind::ACTION_LINK;
+    case Action::Kind::kSet: return msg::ActionKind::ACTION_SET;
+    case Action::Kind::kNone: break;
+  }
+  return msg::ActionKind::ACTION_NONE;
+}
+
+// The view's orientation offset travels with the action once the IDL carries it.
+template <class A>
+void SetRelativeAngle(A& out, double angle_rad) {
+  if constexpr (requires { out.relative_angle_rad; }) out.relative_angle_rad = angle_rad;
+}
+
+}  // namespace
+
+class PoseCellsNode::Processor {
+ public:
+  Processor(ServiceContext& context, const Config& config)
+      : context_(context),
+        config_(config),
+        network_(config.network),
+        joiner_(static_cast<uint64_t>(config.join_window_frames)),
+        last_save_(std::chrono::steady_clock::now()) {
+    LoadState();
+    action_pub_ = context_.Advertise(bus::topics::kPoseCellsAction);
+  }
+
+  // Inputs are subscribed before the resynchronisation, so frames arriving meanwhile wait in
+  // the joiner instead of being lost (the input topics are volatile).
+  static void Subscribe(const std::shared_ptr<Processor>& self) {
+    ServiceContext& ctx = self->context_;
+    ctx.Subscribe<msg::Velocity>(bus::topics::kOdometryVelocity,
+                                 [self](const msg::Velocity& m) { self->OnVelocity(m); });
+    ctx.Subscribe<msg::ViewTemplate>(bus::topics::kTemplatesView,
+                                     [self](const msg::ViewTemplate& m) { self->OnView(m); });
+  }
+
+  void Resynchronise() {
+    std::optional<msg::ExperienceMap> snapshot = AwaitMapSnapshot();
+    std::lock_guard lock(mutex_);
+    if (snapshot) AdoptSnapshot(*snapshot);
+    resynced_ = true;
+    ProcessReady();
+  }
+
+  void Stop() {
+    {
+      std::lock_guard lock(mutex_);
+      stopped_ = true;
+    }
+    SaveState();
+  }
+
+  void Tick() {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_save_ < std::chrono::duration<double>(context_.runtime().state_save_period_s)) return;
+    last_save_ = now;
+    SaveState();
+  }
+
+ private:
+  // ------------------------------------------------------------------------------------------
+  // Input
+
+  void OnVelocity(const msg::Velocity& v) {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    const uint64_t seq = v.header.frame_seq;
+    if (const std::string problem = VelocityProblem(v); !problem.empty()) {
+      context_.Reject("velocity", problem);
+      joiner_.SkipVelocity(seq);
+    } else if (!joiner_.AddVelocity(seq, v)) {
+      context_.Reject("late_velocity", "odometry for frame " + std::to_string(seq) + " came after the frame was processed");
+    }
+    ProcessReady();
+  }
+
+  void OnView(const msg::ViewTemplate& v) {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    const uint64_t seq = v.header.frame_seq;
+    if (const std::string problem = ViewProblem(v); !problem.empty()) {
+      context_.Reject("view", problem);
+      joiner_.SkipView(seq);
+    } else if (!joiner_.AddView(seq, v)) {
+      context_.Reject("late_view", "view for frame " + std::to_string(seq) + " came after the frame was processed");
+    }
+    ProcessReady();
+  }
+
+  std::string VelocityProblem(const msg::Velocity& v) const {
+    if (!std::isfinite(v.vtrans_mps) || !std::isfinite(v.vrot_radps) || !std::isfinite(v.dt_s))
+      return "odometry has a non-finite number";
+    if (v.dt_s < 0 || v.dt_s > config_.max_dt_s)
+      return "dt " + std::to_string(v.dt_s) + " s is outside [0, max_dt_s=" + std::to_string(config_.max_dt_s) + "]";
+    if (std::abs(v.vtrans_mps) > config_.max_vtrans_mps) return "|vtrans| " + std::to_string(v.vtrans_mps) + " m/s is beyond max_vtrans_mps";
+    if (std::abs(v.vrot_radps) > config_.max_vrot_radps) return "|vrot| " + std::to_string(v.vrot_radps) + " rad/s is beyond max_vrot_radps";
+    return "";
+  }
+
+  static std::string ViewProblem(const msg::ViewTemplate& v) {
+    if (!std::isfinite(v.relative_angle_rad)) return "view relative angle is not finite";
+    if (v.template_id >= v.template_count)
+      return "template id " + std::to_string(v.template_id) + " is not below the template count " +
+             std::to_string(v.template_count);
+    return "";
+  }
+
+  // ------------------------------------------------------------------------------------------
+  // Processing (mutex held)
+
+  void ProcessReady() {
+    if (!resynced_) return;  // frames wait in the joiner until the ids are known to agree
+    for (auto& frame : joiner_.TakeReady()) ProcessFrame(frame);
+    const uint64_t incomplete = joiner_.incomplete();
+    for (; reported_incomplete_ < incomplete; ++reported_incomplete_) {
+      context_.Reject("incomplete_frame", "a frame's odometry or view never came; processed with the side it had");
+    }
+  }
+
+  using Joiner = VelocityViewJoiner<msg::Velocity, msg::ViewTemplate>;
+
+  void ProcessFrame(const Joiner::Frame& frame) {
+    const msg::Header& header = frame.velocity ? frame.velocity->header : frame.view->header;
+    double vtrans = 0.0, vrot = 0.0, dt = 0.0;
+    if (frame.velocity) {
+      vtrans = frame.velocity->vtrans_mps;
+      vrot = frame.velocity->vrot_radps;
+      dt = frame.velocity->dt_s;
+    } else if (has_last_frame_ && header.stamp_ns > last_stamp_ns_) {
+      // No odometry: no motion, but the time still passed (the map's link travel times).
+      dt = std::min(config_.max_dt_s, static_cast<double>(header.stamp_ns - last_stamp_ns_) * 1e-9);
+    }
+    const msg::ViewTemplate* view = frame.view ? &*frame.view : nullptr;
+    if (view && view->template_id > network_.template_count()) {
+      context_.Reject("view", "template id " + std::to_string(view->template_id) + " skips ahead of the next expected id " +
+                                  std::to_string(network_.template_count()));
+      view = nullptr;
+    }
+    Action action;
+    try {
+      action = view ? network_.ProcessFrame(vtrans, vrot, dt, view->template_id, view->is_new, view->relative_angle_rad)
+                    : network_.ProcessFrameWithoutView(vtrans, vrot, dt);
+    } catch (const std::invalid_argument& e) {
+      context_.Reject("frame", e.what());
+      return;
+    }
+    msg::PoseCellAction out;
+    out.header = header;
+    out.action_seq = next_action_seq_++;
+    out.kind = ToMessageKind(action.kind);
+    out.experience_id = action.experience_id;
+    out.from_experience_id = action.from_experience_id;
+    out.template_id = action.template_id;
+    out.pc_x = static_cast<float>(action.pc_x);
+    out.pc_y = static_cast<float>(action.pc_y);
+    out.pc_th = static_cast<float>(action.pc_th);
+    out.vtrans_mps = vtrans;
+    out.vrot_radps = vrot;
+    out.dt_s = dt;
+    SetRelativeAngle(out, action.relative_angle_rad);
+    has_last_frame_ = true;
+    last_frame_seq_ = header.frame_seq;
+    last_stamp_ns_ = header.stamp_ns;
+    dirty_ = true;
+    context_.SetLastFrame(header.frame_seq, header.stamp_ns);
+    action_pub_->Publish(out);
+  }
+
+  // ------------------------------------------------------------------------------------------
+  // Resynchronisation
+
+  std::optional<msg::ExperienceMap> AwaitMapSnapshot() {
+    if (config_.resync_timeout_s <= 0) return std::nullopt;
+    bus::Subscriber<msg::ExperienceMap> maps(context_.participant(), bus::topics::kExperienceMapMap);
+    using Clock = std::chrono::steady_clock;
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>(config_.resync_timeout_s));
+    const auto settle = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(config_.resync_settle_s));
+    std::optional<msg::ExperienceMap> latest;
+    while (true) {
+      const auto now = Clock::now();
+      // Before the first snapshot: until the deadline. After it: until it has been quiet for
+      // the settle time (the map publishes its catch-up snapshot when its input stops).
+      const auto until = latest ? now + settle : deadline;
+      if (now >= deadline && !latest) break;
+      const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(until - now);
+      std::optional<msg::ExperienceMap> m = maps.TakeOne(std::max(wait, std::chrono::milliseconds(0)));
+      if (!m) break;
+      if (!latest || m->action_seq >= latest->action_seq) latest = std::move(m);
+      if (Clock::now() >= deadline + settle) break;
+    }
+    if (!latest) spdlog::info("no experience map snapshot within {} s: continuing from the saved state", config_.resync_timeout_s);
+    return latest;
+  }
+
+  void AdoptSnapshot(const msg::ExperienceMap& map) {
+    std::vector<MapExperience> experiences;
+    experiences.reserve(map.experiences.size());
+    for (size_t i = 0; i < map.experiences.size(); ++i) {
+      const msg::Experience& e = map.experiences[i];
+      if (e.id != i) {
+        context_.Reject("map", "snapshot experience ids are not dense; not resynchronised");
+        return;
+      }
+      experiences.push_back({e.template_id, {e.pc_x, e.pc_y, e.pc_th}});
+    }
+    std::vector<std::pair<uint32_t, uint32_t>> links;
+    links.reserve(map.links.size());
+    for (const msg::ExperienceLink& l : map.links) links.emplace_back(l.from_id, l.to_id);
+
+    const bool in_step = map.action_seq + 1 == next_action_seq_ && map.experiences.size() == network_.experience_count();
+    if (in_step) {
+      spdlog::info("experience map agrees with the saved state (action {}, {} experiences)", map.action_seq,
+                   map.experiences.size());
+      return;
+    }
+    try {
+      network_.AdoptExperienceMap(experiences, links, map.current_experience_id);
+    } catch (const std::invalid_argument& e) {
+      context_.Reject("map", std::string("snapshot not adopted: ") + e.what());
+      return;
+    }
+    spdlog::warn(
+        "resynchronised with the experience map: it applied action {} (saved state continues at {}), {} experiences "
+        "(saved {}); continuing at action {}",
+        map.action_seq, next_action_seq_, map.experiences.size(), experience_count_at_load_, map.action_seq + 1);
+    next_action_seq_ = map.action_seq + 1;
+    dirty_ = true;
+  }
+
+  // ------------------------------------------------------------------------------------------
+  // State
+
+  void LoadState() {
+    const std::string path = context_.StateFilePath();
+    if (path.empty() || context_.runtime().fresh || !std::filesystem::exists(path)) return;
+    proto::NodeState state;
+    ReadStateFile(path, kStateKind, kStateVersion, state);  // throws StateFileError when corrupt
+    network_.LoadState(state.network());                    // throws when it does not fit
+    next_action_seq_ = state.next_action_seq();
+    has_last_frame_ = state.has_last_frame();
+    last_frame_seq_ = state.last_frame_seq();
+    last_stamp_ns_ = state.last_stamp_ns();
+    experience_count_at_load_ = network_.experience_count();
+    spdlog::info("loaded {}: {} experiences, {} templates, next action {}", path, network_.experience_count(),
+                 network_.template_count(), next_action_seq_);
+  }
+
+  void SaveState() {
+    const std::string path = context_.StateFilePath();
+    if (path.empty()) return;
+    proto::NodeState state;
+    {
+      std::lock_guard lock(mutex_);
+      if (!dirty_) return;
+      *state.mutable_network() = network_.SaveState();
+      state.set_next_action_seq(next_action_seq_);
+      state.set_has_last_frame(has_last_frame_);
+      state.set_last_frame_seq(last_frame_seq_);
+      state.set_last_stamp_ns(last_stamp_ns_);
+      dirty_ = false;
+    }
+    try {
+      WriteStateFile(path, kStateKind, kStateVersion, state);
+    } catch (const std::exception& e) {
+      spdlog::error("could not save state: {}", e.what());
+    }
+  }
+
+  ServiceContext& context_;
+  const Config config_;
+  std::shared_ptr<bus::Publisher<msg::PoseCellAction>> action_pub_;
+
+  std::mutex mutex_;
+  bool stopped_ = false;
+  bool resynced_ = false;
+  PoseCellNetwork network_;
+  Joiner joiner_;
+  uint64_t reported_incomplete_ = 0;
+  uint64_t next_action_seq_ = 0;
+  bool has_last_frame_ = false;
+  uint64_t last_frame_seq_ = 0;
+  int64_t last_stamp_ns_ = 0;
+  uint32_t experience_count_at_load_ = 0;
+  bool dirty_ = true;  // a fresh start saves too, so a restart sees the file
+  std::chrono::steady_clock::time_point last_save_;
+};
+
+PoseCellsNode::PoseCellsNode(ServiceContext& context, const Config& config)
+    : processor_(std::make_shared<Processor>(context, config)) {
+  Processor::Subscribe(processor_);
+  processor_->Resynchronise();
+}
+
+PoseCellsNode::~PoseCellsNode() { processor_->Stop(); }
+
+void PoseCellsNode::Tick() { processor_->Tick(); }
+
+}  // namespace rslam::pose_cells
