@@ -355,17 +355,21 @@ proto::TemplateLibraryState TemplateLibrary::ToProto() const {
   state.set_height(static_cast<uint32_t>(height_));
   state.set_histogram_bins(static_cast<uint32_t>(encoder_.histogram_bins()));
   state.set_encoding(encoder_.description());
-  const int bins = encoder_.histogram_bins();
-  for (std::size_t id = 0; id < size(); ++id) {
-    proto::Template* t = state.add_templates();
-    t->set_id(static_cast<uint32_t>(id));
-    t->set_pixels(reinterpret_cast<const char*>(pixels_.data() + id * template_size_), template_size_);
-    if (histogram_mode_) {
-      const float* h = histograms_.data() + id * bins;
-      t->mutable_histogram()->Add(h, h + bins);
-    }
-  }
+  for (std::size_t id = 0; id < size(); ++id) *state.add_templates() = TemplateToProto(static_cast<uint32_t>(id));
   return state;
+}
+
+proto::Template TemplateLibrary::TemplateToProto(uint32_t id) const {
+  if (id >= size()) throw std::out_of_range("template " + std::to_string(id) + " of " + std::to_string(size()));
+  proto::Template t;
+  t.set_id(id);
+  t.set_pixels(reinterpret_cast<const char*>(pixels_.data() + std::size_t{id} * template_size_), template_size_);
+  if (histogram_mode_) {
+    const int bins = encoder_.histogram_bins();
+    const float* h = histograms_.data() + std::size_t{id} * bins;
+    t.mutable_histogram()->Add(h, h + bins);
+  }
+  return t;
 }
 
 TemplateLibrary TemplateLibrary::FromProto(const proto::TemplateLibraryState& state, TemplateConfig config) {

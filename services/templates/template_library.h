@@ -74,6 +74,9 @@ class TemplateLibrary {
   const TemplateConfig& config() const { return config_; }
 
   proto::TemplateLibraryState ToProto() const;
+  // One stored template as it appears in ToProto() (for journaling templates one at a time).
+  // Throws std::out_of_range for an id >= size().
+  proto::Template TemplateToProto(uint32_t id) const;
   // Throws std::invalid_argument when the state does not fit the config (mode, sizes, encoding)
   // or is inconsistent (ids not dense, wrong pixel or histogram sizes, bad histogram values).
   static TemplateLibrary FromProto(const proto::TemplateLibraryState& state, TemplateConfig config);
