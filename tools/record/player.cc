@@ -26,7 +26,11 @@ struct PlaybackStopped {};
 struct Output {
   PlayedChannel info;
   const bus::MessageTypeInfo* type = nullptr;
-  bool keep_all = false;
+  // At max speed: wait for acknowledgments after this many messages (0 = never: keep-all
+  // writers get back-pressure instead). Every message for shallow keep-last histories (sensor,
+  // state), so a reader's history never overflows; a quarter of a deep one (log).
+  uint64_t ack_every = 0;
+  uint64_t unacknowledged = 0;
   bool remap = false;
   std::unique_ptr<bus::RawWriter> writer;
 };
@@ -173,7 +177,8 @@ PlayReport PlayFiles(bus::Participant& participant, const std::vector<std::strin
         out.remap = remap != options.robot_remap.end();
         out.info = PlayedChannel{*dds_topic, type->type_name, *qos_name, *robot, out.remap ? remap->second : *robot, 0};
         out.type = type;
-        out.keep_all = bus::SettingsOf(qos).keep_all;
+        const bus::QosSettings settings = bus::SettingsOf(qos);
+        out.ack_every = settings.keep_all ? 0 : settings.depth >= 1000 ? static_cast<uint64_t>(settings.depth / 4) : 1;
         out.writer = participant.CreateRawWriter(
             bus::TopicSpec{*dds_topic, type->type_name, type->key_reader, qos, out.info.partition});
         it = output_by_key.emplace(key, outputs.size()).first;
@@ -225,8 +230,10 @@ PlayReport PlayFiles(bus::Participant& participant, const std::vector<std::strin
             cdr = remapped;
           }
           out.writer->Write(cdr);
-          if (options.max_speed && !out.keep_all && !out.writer->WaitForAcknowledgments(options.ack_timeout))
-            ++report.ack_timeouts;
+          if (options.max_speed && out.ack_every > 0 && ++out.unacknowledged >= out.ack_every) {
+            out.unacknowledged = 0;
+            if (!out.writer->WaitForAcknowledgments(options.ack_timeout)) ++report.ack_timeouts;
+          }
           ++out.info.messages;
           ++report.messages;
         });

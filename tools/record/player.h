@@ -23,8 +23,8 @@ struct PlayOptions {
   // Playback speed: 2 = twice as fast as recorded. Ignored when max_speed.
   double rate = 1.0;
   // As fast as reliable readers take the messages, losing none: keep-all channels rely on
-  // back-pressure; keep-last channels (sensor, state) wait for every matched reader's
-  // acknowledgment of each message.
+  // back-pressure; shallow keep-last channels (sensor, state) wait for every matched reader's
+  // acknowledgment of each message, deep ones (log) of every quarter of their depth.
   bool max_speed = false;
   // Play again from the start until stopped.
   bool loop = false;

@@ -33,9 +33,16 @@ const std::vector<RecordedTopic>& TopicTable() {
 }
 
 bus::QosPreset ParsePresetName(std::string_view name) {
-  for (bus::QosPreset p : {bus::QosPreset::kSensor, bus::QosPreset::kStream, bus::QosPreset::kState})
-    if (bus::PresetName(p) == name) return p;
-  throw std::invalid_argument("unknown QoS preset '" + std::string(name) + "' (sensor, stream or state)");
+  // qos.h has no list of its presets; PresetName answers "?" past the last one.
+  std::string known;
+  for (int i = 0; i < 64; ++i) {
+    const auto preset = static_cast<bus::QosPreset>(i);
+    const std::string_view n = bus::PresetName(preset);
+    if (n == "?") break;
+    if (n == name) return preset;
+    known += (known.empty() ? "" : ", ") + std::string(n);
+  }
+  throw std::invalid_argument("unknown QoS preset '" + std::string(name) + "' (" + known + ")");
 }
 
 }  // namespace rslam::record

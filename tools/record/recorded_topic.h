@@ -20,7 +20,7 @@ struct RecordedTopic {
 // Every topic of the topic table, in table order.
 const std::vector<RecordedTopic>& TopicTable();
 
-// The preset named by bus::PresetName ("sensor", "stream", "state"); throws
+// The preset named by bus::PresetName ("sensor", "stream", "log", "state"); throws
 // std::invalid_argument for any other name.
 bus::QosPreset ParsePresetName(std::string_view name);
 

@@ -37,8 +37,9 @@ std::vector<RecordedTopic> SelectTopics(const RecorderOptions& o) {
 
 // The recorder's reader QoS. Sensor topics are read keep-all: reliability and durability match
 // the publishers' preset, and the history is the reader's own, so a burst of images waits in
-// the reader cache instead of being overwritten before the reader thread takes it. State topics
-// keep their preset (transient-local, so the recorder gets the latest map at once).
+// the reader cache instead of being overwritten before the reader thread takes it. State and log
+// topics keep their preset (transient-local: the recorder gets the latest map, or the whole
+// action log, at once).
 bus::QosPreset ReaderPreset(bus::QosPreset published) {
   return published == bus::QosPreset::kSensor ? bus::QosPreset::kStream : published;
 }
