@@ -37,7 +37,7 @@ class CameraNode::Impl {
       spdlog::info("republishing {} as {}", bus::topics::kSimCamera.name, bus::topics::kCameraImage.name);
       return;
     }
-    source_ = OpenSource(0);
+    source_ = OpenSource();
     spdlog::info("source: {}", source_->Describe());
     // The first frame is read and prepared here, so a source or crop that cannot work fails the
     // start (exit 1, or exit 2 for a crop outside the frame) instead of a thread later.
@@ -63,8 +63,8 @@ class CameraNode::Impl {
   void set_self(const std::shared_ptr<Impl>& self) { self_ = self; }
 
  private:
-  std::unique_ptr<FrameSource> OpenSource(int64_t start_ns) const {
-    if (config_.source == "images") return OpenImageSequence(config_.path, config_.fps, start_ns);
+  std::unique_ptr<FrameSource> OpenSource() const {
+    if (config_.source == "images") return OpenImageSequence(config_.path, config_.fps, config_.start_stamp_ns);
     if (config_.source == "video") return OpenVideoFile(config_.path);
     return OpenDevice(config_.device, config_.width, config_.height, config_.fps);
   }
@@ -120,7 +120,8 @@ class CameraNode::Impl {
     const auto started = Clock::now();
     const int64_t nominal_period_ns = static_cast<int64_t>(1e9 / config_.fps);
     uint64_t seq_offset = 0;
-    int64_t stamp_offset = 0;
+    // Stamps of a looped source: stamp_base + (source stamp - the source's first stamp).
+    std::optional<int64_t> stamp_base, first_source_stamp;
     uint64_t published = 0;
     std::optional<Frame> frame = std::move(first_);
     while (!stopped()) {
@@ -140,14 +141,15 @@ class CameraNode::Impl {
           }
           // Numbers and stamps continue upwards: consumers see one long run, never a jump back.
           seq_offset = last_seq_ + 1;
-          stamp_offset = last_stamp_ns_ + nominal_period_ns;
-          source_ = OpenSource(0);
+          stamp_base = last_stamp_ns_ + nominal_period_ns;
+          first_source_stamp.reset();
+          source_ = OpenSource();
           spdlog::info("end of {}; looping (next frame {})", source_->Describe(), seq_offset);
           continue;
         }
-        if (!live_) {
-          // A recorded source's own stamps start at 0 (images) or the file's position (video).
-          frame->stamp_ns += stamp_offset;
+        if (!live_ && stamp_base) {
+          if (!first_source_stamp) first_source_stamp = frame->stamp_ns;
+          frame->stamp_ns = *stamp_base + (frame->stamp_ns - *first_source_stamp);
         }
         frame->seq += seq_offset;
       }

@@ -1,0 +1,183 @@
+// rslam-odometry as a black box on a private DDS domain: the test plays the camera.
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/bus/participant.h"
+#include "common/bus/publisher.h"
+#include "common/bus/subscriber.h"
+#include "tests/integration/camera/image_test_util.h"
+#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/test_domain.h"
+
+namespace rslam {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ServiceProcess;
+
+const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-odometry";
+constexpr int kWidth = 160;
+constexpr int kHeight = 120;
+constexpr double kFovDeg = 60.0;
+
+class OdometryServiceTest : public ::testing::Test {
+ protected:
+  OdometryServiceTest() {
+    bus::BusConfig config;
+    config.domain_id = domain_.id();
+    participant_ = bus::Participant::Create(config);
+    images_ = std::make_unique<bus::Publisher<msg::Image>>(*participant_, bus::topics::kCameraImage);
+    wheel_ = std::make_unique<bus::Publisher<msg::Velocity>>(*participant_, bus::topics::kWheelOdometry);
+    velocities_ = std::make_unique<bus::Subscriber<msg::Velocity>>(*participant_, bus::topics::kOdometryVelocity);
+    heartbeats_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
+  }
+
+  // Whole-image crops for both profiles, a 60 degree lens, no speed noise floor.
+  std::unique_ptr<ServiceProcess> Start(std::vector<std::string> extra = {}) {
+    std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--set", "service.heartbeat_period_s=0.2"};
+    std::vector<std::string> keys{"vtrans_image_x_min=0", "vtrans_image_x_max=-1", "vtrans_image_y_min=0",
+                                  "vtrans_image_y_max=-1", "vrot_image_x_min=0",   "vrot_image_x_max=-1",
+                                  "vrot_image_y_min=0",   "vrot_image_y_max=-1",   "camera_fov_deg=60",
+                                  "max_shift_px=20"};
+    keys.insert(keys.end(), extra.begin(), extra.end());
+    for (const auto& k : keys) {
+      args.push_back("--set");
+      args.push_back("odometry." + k);
+    }
+    auto process = std::make_unique<ServiceProcess>(kBinary, args);
+    EXPECT_TRUE(images_->WaitForSubscribers(1, 10s)) << process->Output();
+    EXPECT_TRUE(velocities_->WaitForPublishers(1, 10s)) << process->Output();
+    return process;
+  }
+
+  // The view of a camera at horizontal position x in a wide scene.
+  static cv::Mat ViewAt(const cv::Mat& scene, int x) { return scene(cv::Rect(x, 0, kWidth, kHeight)).clone(); }
+
+  std::optional<msg::Velocity> Send(const cv::Mat& image, uint64_t seq, int64_t stamp_ns) {
+    images_->Publish(testing::ImageMessage(image, seq, stamp_ns));
+    return velocities_->TakeOne(5s);
+  }
+
+  testing::TestDomain domain_;
+  std::unique_ptr<bus::Participant> participant_;
+  std::unique_ptr<bus::Publisher<msg::Image>> images_;
+  std::unique_ptr<bus::Publisher<msg::Velocity>> wheel_;
+  std::unique_ptr<bus::Subscriber<msg::Velocity>> velocities_;
+  std::unique_ptr<bus::Subscriber<msg::ServiceStatus>> heartbeats_;
+};
+
+TEST_F(OdometryServiceTest, HorizontalShiftGivesRotationOfTheRightSignAndSize) {
+  auto odometry = Start();
+  const cv::Mat scene = testing::SmoothTexture(kWidth + 100, kHeight, 7);
+  const double rad_per_px = kFovDeg / kWidth * M_PI / 180.0;
+  // Frames 0-4: the scene moves 3 px right per frame (camera turning left, counter-clockwise);
+  // frames 5-8: 2 px left (turning right). Stamps 0.2 s apart.
+  std::vector<int> xs{60, 57, 54, 51, 48, 50, 52, 54, 56};
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    const auto v = Send(ViewAt(scene, xs[i]), i, 1'000'000'000LL + static_cast<int64_t>(i) * 200'000'000);
+    ASSERT_TRUE(v) << "frame " << i << "\n" << odometry->Output();
+    EXPECT_EQ(v->header.frame_seq, i);
+    EXPECT_EQ(v->header.robot_id, "robot1");
+    EXPECT_EQ(v->source, msg::VelocitySource::VELOCITY_VISUAL);
+    if (i == 0) {
+      EXPECT_EQ(v->dt_s, 0.0) << "the first frame has no predecessor";
+      EXPECT_EQ(v->vrot_radps, 0.0);
+      EXPECT_EQ(v->vtrans_mps, 0.0);
+      continue;
+    }
+    EXPECT_NEAR(v->dt_s, 0.2, 1e-12) << "dt from stamps";
+    const int scene_shift = xs[i - 1] - xs[i];  // > 0: scene moved towards larger x
+    EXPECT_NEAR(v->vrot_radps, scene_shift * rad_per_px / 0.2, 1e-9) << "frame " << i;
+  }
+}
+
+TEST_F(OdometryServiceTest, IdenticalFramesGiveZeroSpeedAndDtFromIrregularStamps) {
+  auto odometry = Start();
+  const cv::Mat view = testing::SmoothTexture(kWidth, kHeight, 3);
+  const std::vector<int64_t> stamps{0, 100'000'000, 400'000'000, 450'000'000};
+  for (std::size_t i = 0; i < stamps.size(); ++i) {
+    const auto v = Send(view, i, stamps[i]);
+    ASSERT_TRUE(v) << odometry->Output();
+    EXPECT_EQ(v->vrot_radps, 0.0);
+    EXPECT_NEAR(v->vtrans_mps, 0.0, 1e-9);
+    if (i > 0) EXPECT_NEAR(v->dt_s, (stamps[i] - stamps[i - 1]) * 1e-9, 1e-12);
+  }
+}
+
+TEST_F(OdometryServiceTest, MalformedImagesAreCountedAndAGoodFrameIsStillAnswered) {
+  auto odometry = Start();
+  const cv::Mat view = testing::SmoothTexture(kWidth, kHeight, 5);
+  ASSERT_TRUE(Send(view, 0, 1'000'000'000)) << odometry->Output();
+
+  msg::Image short_step = testing::ImageMessage(view, 1, 1'100'000'000);
+  short_step.step = kWidth - 1;
+  msg::Image size_mismatch = testing::ImageMessage(view, 2, 1'200'000'000);
+  size_mismatch.data.pop_back();
+  msg::Image unknown_encoding = testing::ImageMessage(view, 3, 1'300'000'000);
+  unknown_encoding.encoding = "yuv422";
+  msg::Image huge = testing::ImageMessage(view, 4, 1'400'000'000);
+  huge.width = 1u << 30;
+  huge.height = 1u << 30;
+  huge.step = 1u << 30;
+  msg::Image stale = testing::ImageMessage(view, 5, 900'000'000);  // earlier than frame 0
+  for (const auto* bad : {&short_step, &size_mismatch, &unknown_encoding, &huge, &stale}) images_->Publish(*bad);
+
+  const auto good = Send(view, 6, 1'600'000'000);
+  ASSERT_TRUE(good) << odometry->Output();
+  EXPECT_EQ(good->header.frame_seq, 6u) << "the bad frames got no answer";
+  EXPECT_NEAR(good->dt_s, 0.6, 1e-12) << "dt from the last accepted frame";
+  EXPECT_TRUE(odometry->Running());
+  EXPECT_TRUE(testing::AwaitHeartbeat(*heartbeats_, "odometry",
+                                      [](const msg::ServiceStatus& s) { return s.messages_rejected >= 5; }, 5s))
+      << odometry->Output();
+}
+
+TEST_F(OdometryServiceTest, ImageSizeChangeRestartsTheOdometry) {
+  auto odometry = Start();
+  ASSERT_TRUE(Send(testing::SmoothTexture(kWidth, kHeight, 1), 0, 0)) << odometry->Output();
+  const auto resized = Send(testing::SmoothTexture(kWidth + 40, kHeight, 1), 1, 100'000'000);
+  ASSERT_TRUE(resized) << odometry->Output();
+  EXPECT_EQ(resized->dt_s, 0.0) << "a new image size starts a new run";
+  EXPECT_EQ(resized->vrot_radps, 0.0);
+  const auto next = Send(testing::SmoothTexture(kWidth + 40, kHeight, 1), 2, 200'000'000);
+  ASSERT_TRUE(next) << odometry->Output();
+  EXPECT_NEAR(next->dt_s, 0.1, 1e-12);
+}
+
+TEST_F(OdometryServiceTest, WheelOdometryIsRepublishedWithItsHeader) {
+  auto process = std::make_unique<ServiceProcess>(
+      kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--set",
+                                        "odometry.use_wheel_odometry=true"});
+  ASSERT_TRUE(wheel_->WaitForSubscribers(1, 10s)) << process->Output();
+  ASSERT_TRUE(velocities_->WaitForPublishers(1, 10s)) << process->Output();
+  msg::Velocity w;
+  w.header = {"robot1", 42, 4'200'000'000};
+  w.vtrans_mps = 0.25;
+  w.vrot_radps = -0.1;
+  w.dt_s = 0.1;
+  w.source = msg::VelocitySource::VELOCITY_WHEEL;
+  wheel_->Publish(w);
+  const auto v = velocities_->TakeOne(5s);
+  ASSERT_TRUE(v) << process->Output();
+  EXPECT_EQ(*v, w);
+  msg::Velocity bad = w;
+  bad.vrot_radps = std::nan("");
+  wheel_->Publish(bad);
+  EXPECT_FALSE(velocities_->TakeOne(500ms)) << "a NaN wheel velocity is not passed on";
+}
+
+TEST_F(OdometryServiceTest, BadConfigExitsTwoNamingTheKey) {
+  const auto [code, output] = testing::RunToExit(
+      kBinary, {"--domain", std::to_string(domain_.id()), "--set", "odometry.max_frame_gap_s=0"});
+  EXPECT_EQ(code, 2) << output;
+  EXPECT_NE(output.find("odometry.max_frame_gap_s"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace rslam
