@@ -15,9 +15,9 @@ using namespace testing;
 // robot1 publishing images and velocities to an in-process recorder on a private domain.
 class RecordFiles : public ::testing::Test {
  protected:
-  void StartRecorder(RecorderOptions options) {
+  void StartRecorder(RecorderOptions options, bus::Vendor recorder_vendor = bus::Vendor::kCyclone) {
     options.topics_regex = "^(camera/image|odometry/velocity)$";
-    recorder_participant_ = MakeParticipant(domain_.id(), "rslam-record");
+    recorder_participant_ = MakeParticipant(domain_.id(), "rslam-record", recorder_vendor);
     recorder_ = std::make_unique<Recorder>(*recorder_participant_, options);
     robot_ = MakeParticipant(domain_.id(), "robot1");
     images_ = robot_->CreateRawWriter(bus::TopicSpec{"camera/image", "rslam::msg::Image",
@@ -136,6 +136,20 @@ TEST_F(RecordFiles, SplitByDurationKeepsEveryMessageAcrossFiles) {
     const auto& st = reader.statistics();
     EXPECT_LT(st.message_end_time - st.message_start_time, 200'000'000u) << p;
   }
+}
+
+TEST_F(RecordFiles, FastDdsRecorderRecordsCyclonePublishers) {
+  const auto dir = ScratchDir();
+  RecorderOptions o;
+  o.file.path = (dir / "interop.mcap").string();
+  StartRecorder(o, bus::Vendor::kFastDds);
+  for (uint64_t i = 0; i < 20; ++i) {
+    if (i % 4 == 0) SendImage(i);
+    SendVelocity(i);
+  }
+  const auto paths = StopAndCheck();
+  const mcap::McapReader reader(paths.at(0));
+  for (const auto& [id, c] : reader.channels()) EXPECT_EQ(c.metadata.at(mcap::kMetadataDdsVendor), "fastdds");
 }
 
 }  // namespace

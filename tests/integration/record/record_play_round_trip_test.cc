@@ -228,5 +228,29 @@ TEST(RecordPlayRoundTrip, TopicsFilterPlaysOnlyMatchingTopics) {
   EXPECT_EQ(images.matched(), 0) << "no image writer may exist when images are filtered out";
 }
 
+TEST(RecordPlayRoundTrip, FastDdsPlayerDeliversToCycloneSubscribers) {
+  rslam::testing::TestDomain domain;
+  const auto dir = ScratchDir();
+  const std::string file = (dir / "two.mcap").string();
+  const auto sent = WriteTwoRobotRecording(file);
+  auto tester = MakeParticipant(domain.id(), "tester");
+  RawCollector velocities(*tester, "odometry/velocity", "rslam::msg::Velocity", bus::QosPreset::kStream, "robot2");
+  RawCollector robot1_velocities(*tester, "odometry/velocity", "rslam::msg::Velocity", bus::QosPreset::kStream, "robot1");
+  RawCollector images(*tester, "camera/image", "rslam::msg::Image", bus::QosPreset::kSensor, "robot1");
+  const CliResult play = RunCli({"play", file, "--max", "--dds", "fastdds", "--topics",
+                                 "^(odometry/velocity|camera/image)$", "--domain", std::to_string(domain.id()),
+                                 "--wait-timeout", "15"},
+                                dir / "play.log");
+  ASSERT_EQ(play.code, 0) << play.output;
+  const auto& want_velocities = sent.at({"odometry/velocity", "robot2"});
+  const auto& want_images = sent.at({"camera/image", "robot1"});
+  ASSERT_TRUE(images.WaitForCount(want_images.size(), 10s)) << play.output;
+  ASSERT_TRUE(velocities.WaitForCount(want_velocities.size(), 10s)) << play.output;
+  EXPECT_EQ(velocities.messages(), Padded(want_velocities));
+  EXPECT_EQ(images.messages(), Padded(want_images));
+  ASSERT_TRUE(robot1_velocities.WaitForCount(20, 10s));
+  EXPECT_EQ(robot1_velocities.messages(), Padded(sent.at({"odometry/velocity", "robot1"})));
+}
+
 }  // namespace
 }  // namespace rslam::record
