@@ -89,9 +89,20 @@ class ExplorerNode::Controller {
                                        [self](const msg::MotionFeedback& m) { self->OnFeedback(m); });
   }
 
+  // A robot must not go on driving a plan nobody watches any more: an outstanding command is
+  // cancelled with STOP, and the status says the explorer stopped.
   void Stop() {
     {
       std::lock_guard lock(mutex_);
+      if (awaiting_) {
+        Send({MotionCommand::Kind::kStop});
+        awaiting_.reset();
+      }
+      if (state_ == msg::ExplorationState::EXPLORATION_EXPLORING) {
+        state_ = msg::ExplorationState::EXPLORATION_STOPPED;
+        reason_ = "the explorer service stopped";
+        PublishStatusIfChanged();
+      }
       stopped_ = true;
     }
     SaveState();

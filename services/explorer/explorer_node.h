@@ -14,7 +14,8 @@
 // move the path is checked against the latest grid and, if blocked, the goal is reported blocked
 // and a new plan made. Every plan ends with a pirouette; after it (and after a blocked move) the
 // explorer waits for a grid made after it before planning again. When no reachable unknown
-// remains it sends STOP and reports EXPLORATION_COMPLETE. The planner state (goals set aside,
+// remains it sends STOP and reports EXPLORATION_COMPLETE. When the service stops (SIGTERM) with
+// a command outstanding, it sends STOP and reports EXPLORATION_STOPPED. The planner state (goals set aside,
 // blocked counts, last pirouette) and the command numbering persist in <state_dir>/explorer.pb.
 
 #include <memory>

@@ -193,6 +193,46 @@ TEST_F(ExplorerServiceTest, BlockedMoveIsReplanned) {
   EXPECT_GT(replanned->command_seq, command->command_seq);
 }
 
+// A corridor along +x (walls at |y| = 0.5 m and x = -0.5 m), known up to x = 1.2 m, unknown
+// beyond; optionally closed by a wall across it at x = 0.5 m.
+msg::OccupancyGrid Corridor(bool closed_ahead) {
+  msg::OccupancyGrid g = EmptyGrid(-1);
+  for (int cy = 0; cy < 60; ++cy) {
+    for (int cx = 0; cx < 60; ++cx) {
+      const double x = -1.5 + (cx + 0.5) * 0.05, y = -1.5 + (cy + 0.5) * 0.05;
+      int8_t& cell = g.cells[cy * 60 + cx];
+      if (std::abs(y) > 0.6 || x < -0.6) continue;  // unknown
+      if (std::abs(y) > 0.5 || x < -0.5) cell = 100;
+      else if (x < 1.2) cell = closed_ahead && x > 0.5 && x < 0.6 ? 100 : 0;
+    }
+  }
+  return g;
+}
+
+TEST_F(ExplorerServiceTest, LooksBeforeMovingAndDoesNotDriveIntoANewWall) {
+  auto service = Start();
+  pose_pub_->Publish(RobotAt(0, 0, M_PI / 2));  // facing the corridor's side wall
+  grid_pub_->Publish(Corridor(/*closed_ahead=*/false));
+  const auto turn = NextCommand();
+  ASSERT_TRUE(turn) << service->Output();
+  ASSERT_EQ(turn->kind, msg::MotionKind::MOTION_ROTATE) << "expected to turn towards the unknown end first";
+
+  // While the robot turns, the map learns of a wall across the corridor.
+  grid_pub_->Publish(Corridor(/*closed_ahead=*/true));
+  // Its inputs so far: the pose, the first grid and this one (the heartbeat counts them).
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        const auto s = heartbeat_sub_->TakeOne(100ms);
+        return s && s->service == "explorer" && s->messages_in >= 3;
+      },
+      5s));
+  Feedback(turn->command_seq, msg::MotionState::MOTION_DONE);
+  const auto next = NextCommand();
+  ASSERT_TRUE(next) << service->Output();
+  EXPECT_NE(next->kind, msg::MotionKind::MOTION_MOVE)
+      << "drove into the wall it could see: turned " << turn->angle_rad << ", then moved " << next->distance_m;
+}
+
 TEST_F(ExplorerServiceTest, MalformedGridIsCountedAndTheServiceKeepsRunning) {
   auto service = Start();
   msg::OccupancyGrid bad = PartlyExploredGrid();
@@ -213,7 +253,7 @@ TEST_F(ExplorerServiceTest, MalformedGridIsCountedAndTheServiceKeepsRunning) {
   EXPECT_TRUE(NextCommand()) << service->Output();
 }
 
-TEST_F(ExplorerServiceTest, RestartKeepsNumberingCommandsUpwards) {
+TEST_F(ExplorerServiceTest, StoppingCancelsTheCommandAndRestartKeepsNumberingUpwards) {
   uint64_t first_run_seq = 0;
   {
     auto service = Start();
@@ -221,9 +261,17 @@ TEST_F(ExplorerServiceTest, RestartKeepsNumberingCommandsUpwards) {
     grid_pub_->Publish(PartlyExploredGrid());
     const auto command = NextCommand();
     ASSERT_TRUE(command) << service->Output();
-    first_run_seq = command->command_seq;
     service->Signal(SIGTERM);
     ASSERT_EQ(service->WaitExit(10s), 0) << service->Output();
+    // The outstanding command is cancelled: the robot must not drive on unwatched.
+    const auto stop = NextCommand();
+    ASSERT_TRUE(stop) << service->Output();
+    EXPECT_EQ(stop->kind, msg::MotionKind::MOTION_STOP);
+    EXPECT_GT(stop->command_seq, command->command_seq);
+    first_run_seq = stop->command_seq;
+    EXPECT_TRUE(AwaitStatus([](const msg::ExplorerStatus& s) {
+      return s.state == msg::ExplorationState::EXPLORATION_STOPPED;
+    }));
   }
   EXPECT_TRUE(std::filesystem::exists(state_dir_.path() / "explorer.pb"));
   auto restarted = Start();
