@@ -12,7 +12,9 @@
 #include <nlohmann/json.hpp>
 
 #include "common/bus/subscriber.h"
-#include "common/config/config_error.h"
+#include "common/config/config_loader.h"
+#include "common/node/heartbeat.h"
+#include "common/node/service_context.h"
 #include "common/node/shutdown_signal.h"
 #include "tools/launch/launch_profile.h"
 #include "tools/launch/process_supervisor.h"
@@ -69,22 +71,83 @@ void RegisterLaunchCommand(CLI::App& rslam) {
   });
 }
 
+namespace {
+
+// Bus settings for a diagnostic command: the `bus` section of --config, then the environment,
+// then the flags.
+struct DiagnosticBusArgs {
+  std::string config_file;
+  std::string dds;
+  int domain = -1;
+  std::string robot;
+
+  void AddFlags(CLI::App* cmd) {
+    cmd->add_option("--config", config_file, "YAML config whose `bus` section to use (e.g. a deployment's DDS XML)")
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--dds", dds, "DDS vendor (env RSLAM_DDS)")->check(CLI::IsMember({"cyclone", "fastdds"}));
+    cmd->add_option("--domain", domain, "DDS domain id (env RSLAM_DOMAIN)")->check(CLI::Range(0, 229));
+  }
+  bus::BusConfig Resolve(const std::string& default_robot) const {
+    bus::BusConfig config;
+    try {
+      if (!config_file.empty()) LoadConfigSection(LoadYamlFile(config_file), "bus", config);
+      if (robot.empty() && config_file.empty()) config.robot_id = default_robot;
+      config.ApplyEnvironment();
+      if (!dds.empty()) config.dds = dds;
+      if (domain >= 0) config.domain_id = domain;
+      if (!robot.empty()) config.robot_id = robot;
+      config.Validate();
+    } catch (const ConfigError& e) {
+      throw CLI::RuntimeError(std::string("config error: ") + e.what(), 2);
+    }
+    return config;
+  }
+};
+
+}  // namespace
+
+void RegisterPingCommand(CLI::App& rslam) {
+  auto* cmd = rslam.add_subcommand("ping", "publish a heartbeat as service `ping` for a while (checks a deployment's connectivity with `rslam status` elsewhere)");
+  struct Args {
+    DiagnosticBusArgs bus;
+    double seconds = 10;
+  };
+  auto args = std::make_shared<Args>();
+  args->bus.AddFlags(cmd);
+  cmd->add_option("--robot", args->bus.robot, "robot id to publish as");
+  cmd->add_option("--seconds", args->seconds, "how long to publish");
+  cmd->callback([args] {
+    BlockShutdownSignals();
+    ServiceRuntimeConfig runtime;
+    runtime.heartbeat_period_s = 0.2;
+    ServiceContext context("ping", bus::Participant::Create(args->bus.Resolve("robot1")), runtime);
+    Heartbeat heartbeat(context);
+    struct Tick {
+      Heartbeat& h;
+      std::chrono::steady_clock::time_point end;
+    } tick{heartbeat, std::chrono::steady_clock::now() + std::chrono::milliseconds(static_cast<int64_t>(args->seconds * 1000))};
+    heartbeat.Publish("running");
+    WaitForShutdown(std::chrono::milliseconds(200), [](void* a) {
+      auto* t = static_cast<Tick*>(a);
+      t->h.Publish("running");
+      if (std::chrono::steady_clock::now() >= t->end) RequestShutdown();
+    }, &tick);
+  });
+}
+
 void RegisterStatusCommand(CLI::App& rslam) {
   auto* cmd = rslam.add_subcommand("status", "show the live services of every robot (from rslam/status heartbeats)");
   struct Args {
-    bus::BusConfig bus;
+    DiagnosticBusArgs bus;
     double wait_s = 2.0;
     bool json = false;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("--dds", args->bus.dds, "DDS vendor (env RSLAM_DDS)")->check(CLI::IsMember({"cyclone", "fastdds"}));
-  cmd->add_option("--domain", args->bus.domain_id, "DDS domain id (env RSLAM_DOMAIN)")->check(CLI::Range(0, 229));
+  args->bus.AddFlags(cmd);
   cmd->add_option("--wait", args->wait_s, "seconds to listen for heartbeats");
   cmd->add_flag("--json", args->json, "print JSON");
   cmd->callback([args] {
-    bus::BusConfig config = args->bus;
-    config.robot_id = "rslam-status";
-    config.ApplyEnvironment();
+    const bus::BusConfig config = args->bus.Resolve("rslam-status");
     auto participant = bus::Participant::Create(config);
     bus::Subscriber<msg::ServiceStatus> sub(*participant, bus::topics::kStatus, bus::kAllRobots);
     std::map<std::pair<std::string, std::string>, msg::ServiceStatus> latest;

@@ -1,6 +1,7 @@
 #pragma once
-// `rslam launch PROFILE` (start and supervise a set of services) and `rslam status` (the live
-// services of every robot, from their heartbeats).
+// `rslam launch PROFILE` (start and supervise a set of services), `rslam status` (the live
+// services of every robot, from their heartbeats) and `rslam ping` (a heartbeat of its own, to
+// check a deployment's connectivity).
 
 #include <CLI/CLI.hpp>
 
@@ -10,6 +11,7 @@ namespace rslam::launch {
 
 void RegisterLaunchCommand(CLI::App& rslam);
 void RegisterStatusCommand(CLI::App& rslam);
+void RegisterPingCommand(CLI::App& rslam);
 
 // The folder holding this executable (where rslam-* binaries are).
 std::string ExecutableDir();

@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   rslam::launch::RegisterLaunchCommand(app);
   rslam::launch::RegisterStatusCommand(app);
+  rslam::launch::RegisterPingCommand(app);
   rslam::eval::RegisterEvalCommand(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
