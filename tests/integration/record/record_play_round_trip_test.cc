@@ -252,5 +252,85 @@ TEST(RecordPlayRoundTrip, FastDdsPlayerDeliversToCycloneSubscribers) {
   EXPECT_EQ(robot1_velocities.messages(), Padded(sent.at({"odometry/velocity", "robot1"})));
 }
 
+std::vector<uint64_t> FrameSeqs(const std::vector<std::vector<uint8_t>>& cdrs) {
+  std::vector<uint64_t> out;
+  for (const auto& c : cdrs) out.push_back(bus::FromCdr<msg::Velocity>(c).header.frame_seq);
+  return out;
+}
+
+TEST(RecordPlayRoundTrip, StartEndWindowAtRecordedRatePlaysOnlyThatSlice) {
+  rslam::testing::TestDomain domain;
+  const auto dir = ScratchDir();
+  const std::string file = (dir / "two.mcap").string();
+  WriteTwoRobotRecording(file);  // velocity k at k ms (robot1 even k, robot2 odd), images of i%4==0 at 2(i+1) ms
+  auto tester = MakeParticipant(domain.id(), "tester");
+  RawCollector robot1(*tester, "odometry/velocity", "rslam::msg::Velocity", bus::QosPreset::kStream, "robot1");
+  RawCollector robot2(*tester, "odometry/velocity", "rslam::msg::Velocity", bus::QosPreset::kStream, "robot2");
+  RawCollector images(*tester, "camera/image", "rslam::msg::Image", bus::QosPreset::kSensor, "robot1");
+  const CliResult play = RunCli({"play", file, "--start", "0.010", "--end", "0.0195", "--domain",
+                                 std::to_string(domain.id()), "--wait-timeout", "15"},
+                                dir / "play.log");
+  ASSERT_EQ(play.code, 0) << play.output;
+  ASSERT_TRUE(robot1.WaitForCount(5, 10s)) << play.output;
+  ASSERT_TRUE(robot2.WaitForCount(5, 10s)) << play.output;
+  ASSERT_TRUE(images.WaitForCount(2, 10s)) << play.output;
+  EXPECT_EQ(FrameSeqs(robot1.messages()), (std::vector<uint64_t>{5, 6, 7, 8, 9}));
+  EXPECT_EQ(FrameSeqs(robot2.messages()), (std::vector<uint64_t>{5, 6, 7, 8, 9}));
+  std::vector<uint64_t> image_seqs;
+  for (const auto& c : images.messages()) image_seqs.push_back(bus::FromCdr<msg::Image>(c).header.frame_seq);
+  EXPECT_EQ(image_seqs, (std::vector<uint64_t>{4, 8}));
+}
+
+TEST(RecordPlayRoundTrip, LoopRepeatsUntilInterrupted) {
+  rslam::testing::TestDomain domain;
+  const auto dir = ScratchDir();
+  const std::string file = (dir / "two.mcap").string();
+  const auto sent = WriteTwoRobotRecording(file);
+  auto tester = MakeParticipant(domain.id(), "tester");
+  RawCollector robot2(*tester, "odometry/velocity", "rslam::msg::Velocity", bus::QosPreset::kStream, "robot2");
+  ChildProcess player({Cli(), "play", file, "--loop", "--rate", "4", "--topics", "^odometry/", "--domain",
+                       std::to_string(domain.id()), "--wait-for-readers", "0"},
+                      dir / "play.log");
+  ASSERT_TRUE(robot2.WaitForCount(3 * 20, 20s)) << player.Output();
+  player.Signal(SIGINT);
+  ASSERT_EQ(player.WaitExit(10s), 0) << player.Output();
+  EXPECT_NE(player.Output().find("(stopped)"), std::string::npos) << player.Output();
+  // Every pass repeats the recording in order (the first may start late: no wait for readers).
+  const auto got = FrameSeqs(robot2.messages());
+  for (std::size_t i = 1; i < got.size(); ++i)
+    EXPECT_TRUE(got[i] == got[i - 1] + 1 || (got[i] == 0 && got[i - 1] == 19)) << "at " << i;
+}
+
+TEST(RecordProcess, SigtermFinishesTheFileCleanly) {
+  rslam::testing::TestDomain domain;
+  const auto dir = ScratchDir();
+  const std::string file = (dir / "term.mcap").string();
+  ChildProcess recorder({Cli(), "record", "-o", file, "--domain", std::to_string(domain.id()), "--compression", "lz4"},
+                        dir / "record.log");
+  ASSERT_TRUE(recorder.WaitForOutput("[record] recording", 15s)) << recorder.Output();
+  recorder.Signal(SIGTERM);
+  ASSERT_EQ(recorder.WaitExit(15s), 0) << recorder.Output();
+  const CliResult info = RunCli({"info", file, "--json"}, dir / "info.log");
+  ASSERT_EQ(info.code, 0) << info.output;
+  EXPECT_EQ(nlohmann::json::parse(info.output)["message_count"], 0);
+}
+
+TEST(RecordProcess, BadCommandLinesAreRefused) {
+  rslam::testing::TestDomain domain;
+  const std::string d = std::to_string(domain.id());
+  const auto dir = ScratchDir();
+  EXPECT_NE(RunCli({"record", "-o", (dir / "x.mcap").string(), "--topics", "(unclosed", "--domain", d},
+                   dir / "a.log").code, 0);
+  EXPECT_NE(RunCli({"record", "-o", (dir / "x.mcap").string(), "--compression", "brotli"}, dir / "b.log").code, 0);
+  EXPECT_NE(RunCli({"record", "-o", (dir / "x.mcap").string(), "--split-size", "1", "--split-duration", "1"},
+                   dir / "c.log").code, 0);
+  const std::string file = (dir / "two.mcap").string();
+  WriteTwoRobotRecording(file);
+  EXPECT_NE(RunCli({"play", file, "--rate", "2", "--max"}, dir / "d.log").code, 0);
+  const CliResult remap = RunCli({"play", file, "--robot-remap", "robot1", "--domain", d}, dir / "e.log");
+  EXPECT_EQ(remap.code, 2) << remap.output;
+  EXPECT_NE(remap.output.find("--robot-remap"), std::string::npos) << remap.output;
+}
+
 }  // namespace
 }  // namespace rslam::record
