@@ -530,6 +530,15 @@ void PoseCellNetwork::InjectView(uint32_t template_id, double relative_angle_rad
     // 001 eq. 3: associate with the cell that would be active with no orientation offset.
     views_.push_back(
         {best_.x, best_.y, WrapReal(best_.th - gamma_cells, dim_th_), active_decay, view_updates_, {}});
+  } else if (!views_[template_id].placed) {
+    // Learnt while this network did not see it: this first sighting associates it (eq. 3).
+    ViewAssociation& view = views_[template_id];
+    view.pc_x = best_.x;
+    view.pc_y = best_.y;
+    view.pc_th = WrapReal(best_.th - gamma_cells, dim_th_);
+    view.decay = active_decay;
+    view.decay_stamp = view_updates_;
+    view.placed = true;
   } else {
     ViewAssociation& view = views_[template_id];
     // Injection only from templates older than vt_inject_min_age (OpenRatSLAM: 10), so a view
@@ -655,6 +664,16 @@ Action PoseCellNetwork::ProcessFrame(double vtrans_mps, double vrot_radps, doubl
   return DecideAction();
 }
 
+void PoseCellNetwork::SkipTemplates(uint32_t next_template_id) {
+  if (next_template_id < views_.size()) {
+    throw std::invalid_argument("pose cells: cannot skip back to template " + std::to_string(next_template_id) +
+                                " (" + std::to_string(views_.size()) + " known)");
+  }
+  while (views_.size() < next_template_id) {
+    views_.push_back({best_.x, best_.y, best_.th, config_.vt_active_decay, view_updates_, {}, false});
+  }
+}
+
 Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_radps, double dt_s) {
   ValidateFrame(vtrans_mps, vrot_radps, dt_s, 0, 0.0);
   Step(vtrans_mps, vrot_radps, dt_s);
@@ -692,11 +711,9 @@ void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& exper
   }
   const PoseCellPosition fallback = n > 0 ? experiences[current_experience_id].cell : best_;
   for (uint32_t t = static_cast<uint32_t>(views_.size()); t < template_end; ++t) {
-    // A template without experiences takes the cell of the next template that has one.
-    const PoseCellPosition* cell = nullptr;
-    for (uint32_t u = t; u < template_end && !cell; ++u) cell = first_cell[u];
-    const PoseCellPosition& p = cell ? *cell : fallback;
-    views_.push_back({p.x, p.y, p.th, config_.vt_active_decay, view_updates_, {}});
+    // A template without experiences is placed at its next sighting.
+    const PoseCellPosition& p = first_cell[t] ? *first_cell[t] : fallback;
+    views_.push_back({p.x, p.y, p.th, config_.vt_active_decay, view_updates_, {}, first_cell[t] != nullptr});
   }
   for (ViewAssociation& v : views_) v.experience_ids.clear();
   experiences_.clear();
@@ -781,6 +798,7 @@ proto::State PoseCellNetwork::SaveState() const {
     pv->set_pc_th(v.pc_th);
     pv->set_decay(v.decay);
     pv->set_decay_stamp(v.decay_stamp);
+    pv->set_unplaced(!v.placed);
     for (uint32_t id : v.experience_ids) pv->add_experience_ids(id);
   }
   for (const ExperienceCell& e : experiences_) {
@@ -877,7 +895,7 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   views_.clear();
   for (const auto& v : s.views()) {
     views_.push_back({v.pc_x(), v.pc_y(), v.pc_th(), v.decay(), v.decay_stamp(),
-                      std::vector<uint32_t>(v.experience_ids().begin(), v.experience_ids().end())});
+                      std::vector<uint32_t>(v.experience_ids().begin(), v.experience_ids().end()), !v.unplaced()});
   }
   experiences_.clear();
   for (const auto& e : s.experiences()) experiences_.push_back({e.pc_x(), e.pc_y(), e.pc_th(), e.template_id()});

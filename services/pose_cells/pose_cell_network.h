@@ -70,12 +70,19 @@ class PoseCellNetwork {
   // when actions were lost, fewer. This replaces the experience bookkeeping (experiences, their
   // template associations, known links, current experience) with the map's, so the next
   // created id is the map's next id. Templates this network has not seen yet are associated
-  // with the cell of their first experience (their learning cell, 001 eq. 3 without offset);
-  // the activity packet is moved to the current experience's cell, where the robot last was.
+  // with the cell of their first experience (their learning cell, 001 eq. 3 without offset),
+  // or recorded unplaced (SkipTemplates) when they have none; the activity packet is moved to the current experience's cell, where the robot last was.
   // Throws std::invalid_argument (network unchanged) on out-of-range cells or ids.
   void AdoptExperienceMap(const std::vector<MapExperience>& experiences,
                           const std::vector<std::pair<uint32_t, uint32_t>>& links,
                           uint32_t current_experience_id);
+
+  // Templates [template_count(), next_template_id) were learnt while this network did not see
+  // their views (it was down, or their frames were lost). They are recorded unplaced: the first
+  // time one is seen it is associated with the then current pose, as a new template would be
+  // (001 eq. 3), and injects nothing until then. Throws std::invalid_argument when
+  // next_template_id is below template_count() (nothing changes).
+  void SkipTemplates(uint32_t next_template_id);
 
   // Finer steps (ProcessFrame = InjectView, Step, DecideAction).
   void InjectView(uint32_t template_id, double relative_angle_rad, bool is_new);
@@ -123,6 +130,7 @@ class PoseCellNetwork {
     double decay;         // as of view update number decay_stamp
     uint64_t decay_stamp;
     std::vector<uint32_t> experience_ids;
+    bool placed = true;  // false: learnt unseen (SkipTemplates), associated at its next sighting
   };
   // OpenRatSLAM subtracts pc_vt_restore from every template's decay on every view update
   // (clamped at vt_active_decay); done lazily here.

@@ -48,7 +48,8 @@ class PoseCellsNode::Processor {
       : context_(context),
         config_(config),
         network_(config.network),
-        joiner_(static_cast<uint64_t>(config.join_window_frames)),
+        joiner_(static_cast<uint64_t>(config.join_window_frames),
+                static_cast<int64_t>(config.join_timeout_s * 1e9)),
         last_save_(std::chrono::steady_clock::now()) {
     LoadState();
     action_pub_ = context_.Advertise(bus::topics::kPoseCellsAction);
@@ -81,6 +82,11 @@ class PoseCellsNode::Processor {
   }
 
   void Tick() {
+    {
+      // A frame whose partner stream died is released here when no other input comes.
+      std::lock_guard lock(mutex_);
+      if (!stopped_) ProcessReady();
+    }
     const auto now = std::chrono::steady_clock::now();
     if (now - last_save_ < std::chrono::duration<double>(context_.runtime().state_save_period_s)) return;
     last_save_ = now;
@@ -98,7 +104,7 @@ class PoseCellsNode::Processor {
     if (const std::string problem = VelocityProblem(v); !problem.empty()) {
       context_.Reject("velocity", problem);
       joiner_.SkipVelocity(seq);
-    } else if (!joiner_.AddVelocity(seq, v)) {
+    } else if (!joiner_.AddVelocity(seq, v, NowNs())) {
       context_.Reject("late_velocity", "odometry for frame " + std::to_string(seq) + " came after the frame was processed");
     }
     ProcessReady();
@@ -111,7 +117,7 @@ class PoseCellsNode::Processor {
     if (const std::string problem = ViewProblem(v); !problem.empty()) {
       context_.Reject("view", problem);
       joiner_.SkipView(seq);
-    } else if (!joiner_.AddView(seq, v)) {
+    } else if (!joiner_.AddView(seq, v, NowNs())) {
       context_.Reject("late_view", "view for frame " + std::to_string(seq) + " came after the frame was processed");
     }
     ProcessReady();
@@ -138,9 +144,14 @@ class PoseCellsNode::Processor {
   // ------------------------------------------------------------------------------------------
   // Processing (mutex held)
 
+  static int64_t NowNs() {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+  }
+
   void ProcessReady() {
     if (!resynced_) return;  // frames wait in the joiner until the ids are known to agree
-    for (auto& frame : joiner_.TakeReady()) ProcessFrame(frame);
+    for (auto& frame : joiner_.TakeReady(NowNs())) ProcessFrame(frame);
     const uint64_t incomplete = joiner_.incomplete();
     for (; reported_incomplete_ < incomplete; ++reported_incomplete_) {
       context_.Reject("incomplete_frame", "a frame's odometry or view never came; processed with the side it had");
@@ -162,9 +173,21 @@ class PoseCellsNode::Processor {
     }
     const msg::ViewTemplate* view = frame.view ? &*frame.view : nullptr;
     if (view && view->template_id > network_.template_count()) {
-      context_.Reject("view", "template id " + std::to_string(view->template_id) + " skips ahead of the next expected id " +
-                                  std::to_string(network_.template_count()));
-      view = nullptr;
+      // The template learner learns at most one template per frame, so the templates this
+      // network never saw fit in the frames it never saw (it was down, or they were lost);
+      // more than that is a malformed id.
+      const uint64_t missed = view->template_id - network_.template_count();
+      const uint64_t unseen_frames =
+          has_last_frame_ ? (frame.frame_seq > last_frame_seq_ ? frame.frame_seq - last_frame_seq_ - 1 : 0)
+                          : frame.frame_seq;
+      if (missed <= unseen_frames) {
+        network_.SkipTemplates(view->template_id);
+      } else {
+        context_.Reject("view", "template id " + std::to_string(view->template_id) + " skips " + std::to_string(missed) +
+                                    " templates past the next expected id " + std::to_string(network_.template_count()) +
+                                    " in " + std::to_string(unseen_frames) + " unseen frames");
+        view = nullptr;
+      }
     }
     Action action;
     try {

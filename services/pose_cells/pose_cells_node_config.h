@@ -14,7 +14,9 @@ struct PoseCellsNodeConfig {
   PoseCellConfig network;
   // A frame whose odometry or view never comes is processed with the side it has once the other
   // stream is this many frames ahead (its producer died); until then it waits.
+  // ...and the frame has waited join_timeout_s.
   int join_window_frames = 20;
+  double join_timeout_s = 1.0;
   // At start, wait this long for the experience map's snapshot to resynchronise experience ids
   // and the action sequence (0 = do not wait; a missing map is not an error).
   double resync_timeout_s = 3.0;
@@ -31,6 +33,8 @@ struct PoseCellsNodeConfig {
     network.VisitFields(v);
     v("join_window_frames", join_window_frames,
       "frames the live input may run ahead before a frame missing its odometry or view is processed without it");
+    v("join_timeout_s", join_timeout_s,
+      "seconds a frame missing its odometry or view waits (with the window) before it is processed without it");
     v("resync_timeout_s", resync_timeout_s,
       "seconds to wait at start for the experience map snapshot (resynchronisation); 0 = no wait");
     v("resync_settle_s", resync_settle_s, "seconds to keep listening for a newer snapshot after one arrived");
@@ -42,6 +46,8 @@ struct PoseCellsNodeConfig {
   void Validate() const {
     network.Validate();
     Require(join_window_frames >= 1 && join_window_frames <= 100000, "join_window_frames", "must be in 1..100000");
+    Require(std::isfinite(join_timeout_s) && join_timeout_s >= 0 && join_timeout_s <= 600, "join_timeout_s",
+            "must be in [0, 600]");
     Require(std::isfinite(resync_timeout_s) && resync_timeout_s >= 0 && resync_timeout_s <= 600, "resync_timeout_s",
             "must be in [0, 600]");
     Require(std::isfinite(resync_settle_s) && resync_settle_s >= 0 && resync_settle_s <= 60, "resync_settle_s",

@@ -1,0 +1,216 @@
+// rslam-pose-cells as a process on the test's own DDS domain: odometry and views in, one
+// pose-cell action per frame out.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/bus/participant.h"
+#include "common/bus/publisher.h"
+#include "common/bus/subscriber.h"
+#include "services/pose_cells/pose_cell_network.h"
+#include "tests/integration/occupancy/service_process.h"
+#include "tests/integration/pose_cells/scripted_loop.h"
+#include "tests/support/test_domain.h"
+
+namespace rslam {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ScriptedFrame;
+using testing::ServiceProcess;
+using testing::TempDir;
+using testing::WaitUntil;
+
+const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-pose-cells";
+
+msg::ActionKind KindOf(pose_cells::Action::Kind k) {
+  switch (k) {
+    case pose_cells::Action::Kind::kCreate: return msg::ActionKind::ACTION_CREATE;
+    case pose_cells::Action::Kind::kLink: return msg::ActionKind::ACTION_LINK;
+    case pose_cells::Action::Kind::kSet: return msg::ActionKind::ACTION_SET;
+    case pose_cells::Action::Kind::kNone: break;
+  }
+  return msg::ActionKind::ACTION_NONE;
+}
+
+class PoseCellsServiceTest : public ::testing::Test {
+ protected:
+  PoseCellsServiceTest() {
+    bus::BusConfig config;
+    config.domain_id = domain_.id();
+    participant_ = bus::Participant::Create(config);
+    velocity_pub_ = std::make_unique<bus::Publisher<msg::Velocity>>(*participant_, bus::topics::kOdometryVelocity);
+    view_pub_ = std::make_unique<bus::Publisher<msg::ViewTemplate>>(*participant_, bus::topics::kTemplatesView);
+    action_sub_ = std::make_unique<bus::Subscriber<msg::PoseCellAction>>(*participant_, bus::topics::kPoseCellsAction);
+    status_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
+  }
+
+  std::unique_ptr<ServiceProcess> Start() {
+    auto process = std::make_unique<ServiceProcess>(
+        kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--state-dir",
+                                          state_dir_.path().string(), "--set", "service.heartbeat_period_s=0.2",
+                                          "--set", "pose_cells.resync_timeout_s=0"});
+    const bool matched = WaitUntil(
+        [&] {
+          return velocity_pub_->MatchedSubscribers() > 0 && view_pub_->MatchedSubscribers() > 0 &&
+                 action_sub_->MatchedPublishers() > 0;
+        },
+        10s);
+    EXPECT_TRUE(matched) << process->Output();
+    return process;
+  }
+
+  std::vector<msg::PoseCellAction> AwaitActions(size_t n, std::chrono::milliseconds timeout = 10s) {
+    std::vector<msg::PoseCellAction> out;
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (out.size() < n && std::chrono::steady_clock::now() < deadline) {
+      if (auto a = action_sub_->TakeOne(100ms)) out.push_back(*a);
+    }
+    return out;
+  }
+
+  std::optional<msg::ServiceStatus> AwaitStatus(uint64_t min_rejected, std::chrono::milliseconds timeout = 5s) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (auto s = status_sub_->TakeOne(100ms); s && s->service == "pose_cells" && s->messages_rejected >= min_rejected)
+        return s;
+    }
+    return std::nullopt;
+  }
+
+  testing::TestDomain domain_;
+  TempDir state_dir_;
+  std::unique_ptr<bus::Participant> participant_;
+  std::unique_ptr<bus::Publisher<msg::Velocity>> velocity_pub_;
+  std::unique_ptr<bus::Publisher<msg::ViewTemplate>> view_pub_;
+  std::unique_ptr<bus::Subscriber<msg::PoseCellAction>> action_sub_;
+  std::unique_ptr<bus::Subscriber<msg::ServiceStatus>> status_sub_;
+};
+
+TEST_F(PoseCellsServiceTest, OneActionPerFrameInOrderCreatesThenLinksWhenTheFirstViewReturns) {
+  auto service = Start();
+  const int frames = testing::kLapFrames + 10;
+  const std::vector<ScriptedFrame> script = testing::ScriptedLoop(frames);
+  // The two topics interleave out of order: a block's views first, then its odometry.
+  for (int block = 0; block < frames; block += 5) {
+    for (int i = block; i < block + 5 && i < frames; ++i) view_pub_->Publish(script[i].view);
+    for (int i = block; i < block + 5 && i < frames; ++i) velocity_pub_->Publish(script[i].velocity);
+  }
+  const auto actions = AwaitActions(frames);
+  ASSERT_EQ(actions.size(), static_cast<size_t>(frames)) << service->Output();
+
+  // The same frames through the library: the service adds nothing and loses nothing.
+  pose_cells::PoseCellNetwork reference(pose_cells::PoseCellConfig{});
+  int creates = 0, first_link = -1;
+  for (int i = 0; i < frames; ++i) {
+    const ScriptedFrame& f = script[i];
+    const pose_cells::Action want = reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
+                                                           f.view.template_id, f.view.is_new, 0.0);
+    const msg::PoseCellAction& got = actions[i];
+    EXPECT_EQ(got.action_seq, static_cast<uint64_t>(i));
+    EXPECT_EQ(got.header, f.velocity.header);
+    EXPECT_EQ(got.kind, KindOf(want.kind)) << "frame " << i;
+    EXPECT_EQ(got.vtrans_mps, f.velocity.vtrans_mps);
+    EXPECT_EQ(got.vrot_radps, f.velocity.vrot_radps);
+    EXPECT_EQ(got.dt_s, f.velocity.dt_s);
+    if (want.kind != pose_cells::Action::Kind::kNone) {
+      EXPECT_EQ(got.experience_id, want.experience_id) << "frame " << i;
+      EXPECT_EQ(got.from_experience_id, want.from_experience_id) << "frame " << i;
+    }
+    if (got.kind == msg::ActionKind::ACTION_CREATE) ++creates;
+    if (got.kind == msg::ActionKind::ACTION_LINK && first_link < 0) first_link = i;
+  }
+  EXPECT_EQ(actions[0].kind, msg::ActionKind::ACTION_CREATE);
+  EXPECT_EQ(actions[0].experience_id, 0u);
+  EXPECT_GE(creates, 8);
+  ASSERT_GE(first_link, testing::kLapFrames) << "the loop closes when the first view returns, not before";
+  EXPECT_LE(first_link, testing::kLapFrames + 2);
+  EXPECT_EQ(actions[first_link].experience_id, 0u);
+  EXPECT_TRUE(service->Running());
+  if (HasFailure()) ADD_FAILURE() << service->Output();
+}
+
+TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
+  auto service = Start();
+  std::vector<ScriptedFrame> script = testing::ScriptedLoop(12);
+  script[5].velocity.vtrans_mps = std::numeric_limits<double>::quiet_NaN();
+  script[6].view.template_id = 500;  // 500 templates learnt in one frame: impossible
+  script[6].view.template_count = 501;
+  script[7].velocity.dt_s = -0.1;
+  script[8].view.relative_angle_rad = std::numeric_limits<double>::infinity();
+  for (const ScriptedFrame& f : script) {
+    velocity_pub_->Publish(f.velocity);
+    view_pub_->Publish(f.view);
+  }
+  // Every frame still gives its action: a refused side is processed as missing.
+  const auto actions = AwaitActions(script.size());
+  ASSERT_EQ(actions.size(), script.size()) << service->Output();
+  for (size_t i = 0; i < actions.size(); ++i) {
+    EXPECT_EQ(actions[i].action_seq, i);
+    EXPECT_EQ(actions[i].header.frame_seq, i);
+    EXPECT_TRUE(std::isfinite(actions[i].vtrans_mps));
+  }
+  EXPECT_EQ(actions[5].vtrans_mps, 0.0);  // refused odometry = no motion
+  EXPECT_EQ(actions[5].dt_s, 0.1);        // but the time between the frames still passed
+  const auto status = AwaitStatus(4);
+  ASSERT_TRUE(status) << service->Output();
+  EXPECT_GE(status->messages_rejected, 4u);
+  EXPECT_TRUE(service->Running());
+}
+
+TEST_F(PoseCellsServiceTest, SigtermSavesStateAndRestartContinuesTheActionSequence) {
+  auto service = Start();
+  const std::vector<ScriptedFrame> script = testing::ScriptedLoop(40);
+  for (int i = 0; i < 20; ++i) {
+    velocity_pub_->Publish(script[i].velocity);
+    view_pub_->Publish(script[i].view);
+  }
+  ASSERT_EQ(AwaitActions(20).size(), 20u) << service->Output();
+  service->Signal(SIGTERM);
+  ASSERT_EQ(service->WaitExit(10s), std::optional<int>(0)) << service->Output();
+  ASSERT_TRUE(std::filesystem::exists(state_dir_.path() / "pose_cells.pb"));
+
+  auto restarted = Start();
+  for (int i = 20; i < 40; ++i) {
+    velocity_pub_->Publish(script[i].velocity);
+    view_pub_->Publish(script[i].view);
+  }
+  const auto actions = AwaitActions(20);
+  ASSERT_EQ(actions.size(), 20u) << restarted->Output();
+  // The same actions an uninterrupted network gives.
+  pose_cells::PoseCellNetwork reference(pose_cells::PoseCellConfig{});
+  for (int i = 0; i < 40; ++i) {
+    const ScriptedFrame& f = script[i];
+    const auto want = reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
+                                             f.view.template_id, f.view.is_new, 0.0);
+    if (i < 20) continue;
+    EXPECT_EQ(actions[i - 20].action_seq, static_cast<uint64_t>(i));
+    EXPECT_EQ(actions[i - 20].kind, KindOf(want.kind)) << "frame " << i;
+    if (want.kind != pose_cells::Action::Kind::kNone) EXPECT_EQ(actions[i - 20].experience_id, want.experience_id);
+  }
+}
+
+TEST_F(PoseCellsServiceTest, CorruptStateFileIsRefusedAtStart) {
+  std::ofstream(state_dir_.path() / "pose_cells.pb") << "not a state file";
+  const auto [code, output] = testing::RunToExit(
+      kBinary, {"--domain", std::to_string(domain_.id()), "--state-dir", state_dir_.path().string()});
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("pose_cells.pb"), std::string::npos) << output;
+}
+
+TEST_F(PoseCellsServiceTest, UnknownConfigKeyExitsTwoNamingTheKey) {
+  const auto [code, output] =
+      testing::RunToExit(kBinary, {"--domain", std::to_string(domain_.id()), "--set", "pose_cells.pc_dim_zz=3"});
+  EXPECT_EQ(code, 2) << output;
+  EXPECT_NE(output.find("pose_cells.pc_dim_zz"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace rslam
