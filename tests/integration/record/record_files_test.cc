@@ -152,5 +152,47 @@ TEST_F(RecordFiles, FastDdsRecorderRecordsCyclonePublishers) {
   for (const auto& [id, c] : reader.channels()) EXPECT_EQ(c.metadata.at(mcap::kMetadataDdsVendor), "fastdds");
 }
 
+TEST(RecordRobots, RobotOptionRecordsOnlyThoseRobotsPartitions) {
+  rslam::testing::TestDomain domain;
+  const auto dir = ScratchDir();
+  RecorderOptions o;
+  o.file.path = (dir / "robot2.mcap").string();
+  o.topics_regex = "^odometry/velocity$";
+  o.robots = {"robot2"};
+  auto recorder_participant = MakeParticipant(domain.id(), "rslam-record");
+  Recorder recorder(*recorder_participant, o);
+  ASSERT_EQ(recorder.Subscriptions().size(), 1u);
+  EXPECT_EQ(recorder.Subscriptions()[0].partition, "robot2");
+  std::vector<std::unique_ptr<bus::Participant>> robots;
+  std::vector<std::unique_ptr<bus::RawWriter>> writers;
+  for (const std::string robot : {"robot1", "robot2"}) {
+    robots.push_back(MakeParticipant(domain.id(), robot));
+    writers.push_back(robots.back()->CreateRawWriter(bus::TopicSpec{
+        "odometry/velocity", "rslam::msg::Velocity", bus::KeyReaderFor<msg::Velocity>(), bus::QosPreset::kStream, robot}));
+  }
+  ASSERT_TRUE(WaitForReaders(std::vector<bus::RawWriter*>{writers[1].get()}, 1, 15s));
+  const auto deadline = std::chrono::steady_clock::now() + 15s;
+  while (recorder.Subscriptions()[0].matched_writers < 1) {
+    ASSERT_LT(std::chrono::steady_clock::now(), deadline);
+    std::this_thread::sleep_for(10ms);  // DDS offers no wait on matching
+  }
+  std::vector<std::vector<uint8_t>> robot2_sent;
+  for (int i = 0; i < 10; ++i) {
+    for (std::size_t r = 0; r < 2; ++r) {
+      msg::Velocity v;
+      FillExample(v, i);
+      v.header.robot_id = r == 0 ? "robot1" : "robot2";
+      auto cdr = bus::ToCdr(v);
+      writers[r]->Write(cdr);
+      if (r == 1) robot2_sent.push_back(Padded(cdr));
+    }
+  }
+  ASSERT_TRUE(writers[1]->WaitForAcknowledgments(10s));
+  recorder.Stop();
+  const auto channels = ReadChannels(recorder.paths());
+  ASSERT_EQ(channels.size(), 1u) << "only robot2's channel";
+  EXPECT_EQ(channels.at({"odometry/velocity", "robot2"}), robot2_sent);
+}
+
 }  // namespace
 }  // namespace rslam::record
