@@ -148,33 +148,39 @@ void RatSlamRunner::ApplyToMap(const odometry::Velocity& velocity, double dt_s, 
   }
 }
 
-RelaxResult RatSlamRunner::RelaxToConvergence(double tolerance, int max_sweeps) {
+double RatSlamRunner::RmsLinkError() const {
+  const auto& experiences = map_.experiences();
+  const auto& links = map_.links();
+  if (links.empty()) return 0.0;
+  double sum = 0.0;
+  for (const auto& link : links) {
+    const auto& from = experiences[link.from_id];
+    const auto& to = experiences[link.to_id];
+    const double ex = from.x_m + link.d_m * std::cos(from.th_rad + link.heading_rad) - to.x_m;
+    const double ey = from.y_m + link.d_m * std::sin(from.th_rad + link.heading_rad) - to.y_m;
+    sum += ex * ex + ey * ey;
+  }
+  return std::sqrt(sum / static_cast<double>(links.size()));
+}
+
+RelaxResult RatSlamRunner::RelaxToConvergence(double relative_tolerance, int max_sweeps) {
   constexpr int kSweepsPerBatch = 10;
   RelaxResult result;
+  double error = RmsLinkError();
+  result.rms_link_error_m = error;
   if (map_.links().empty()) {
     result.converged = true;
     return result;
   }
-  std::vector<double> before;
   while (result.sweeps < max_sweeps) {
-    const auto& experiences = map_.experiences();
-    before.clear();
-    for (const auto& e : experiences) {
-      before.push_back(e.x_m);
-      before.push_back(e.y_m);
-      before.push_back(e.th_rad);
-    }
     const int batch = std::min(kSweepsPerBatch, max_sweeps - result.sweeps);
     map_.Relax(batch);
     result.sweeps += batch;
-    double change = 0.0;
-    for (size_t i = 0; i < experiences.size(); ++i) {
-      const auto& e = experiences[i];
-      change = std::max({change, std::abs(e.x_m - before[3 * i]), std::abs(e.y_m - before[3 * i + 1]),
-                         std::abs(std::remainder(e.th_rad - before[3 * i + 2], 2 * M_PI))});
-    }
-    result.last_change_m = change;
-    if (change <= tolerance) {
+    const double next = RmsLinkError();
+    result.last_change_m = std::abs(next - error);
+    result.rms_link_error_m = next;
+    error = next;
+    if (result.last_change_m <= std::max(1e-9, relative_tolerance * next)) {
       result.converged = true;
       break;
     }

@@ -52,7 +52,8 @@ struct FrameRecord {
 struct RelaxResult {
   int sweeps = 0;
   bool converged = false;
-  double last_change_m = 0.0;  // largest experience move (m or rad) in the last batch of sweeps
+  double rms_link_error_m = 0.0;  // after the last batch
+  double last_change_m = 0.0;     // change of rms_link_error_m over the last batch
 };
 
 // The action as the experience map receives it (same fields as the pose cells' action).
@@ -81,9 +82,14 @@ class RatSlamRunner {
   // IntegrateMeasurements as {id, is_new = true} on the next step.
   uint32_t LearnTemplate(const cv::Mat& image);
 
-  // Full correction sweeps (000 eq. 3) in batches until no experience moves more than
-  // tolerance between batches, or max_sweeps.
-  RelaxResult RelaxToConvergence(double tolerance = 1e-6, int max_sweeps = 100000);
+  // Full correction sweeps (000 eq. 3) in batches of 10 until the root-mean-square link error
+  // (position, m) changes by no more than relative_tolerance of itself (or 1e-9 m) over a batch,
+  // or max_sweeps. A map with inconsistent loops keeps a residual error, and its experiences can
+  // keep drifting together without the links getting any better: that is converged too.
+  RelaxResult RelaxToConvergence(double relative_tolerance = 1e-6, int max_sweeps = 20000);
+  // Root-mean-square over links of the distance between where a link puts its target and where
+  // the target is (000 eq. 3's error), metres; 0 without links.
+  double RmsLinkError() const;
 
   const odometry::VisualOdometry& odometry() const { return odometry_; }
   const templates::TemplateLibrary& templates() const { return templates_; }

@@ -58,6 +58,7 @@ nlohmann::json MakeSummary(const RatSlamRunner& runner, const RunStatistics& sta
   summary["source"] = description.source;
   summary["relaxed"] = relax.converged;
   summary["relax_sweeps"] = relax.sweeps;
+  summary["rms_link_error_m"] = relax.rms_link_error_m;
   summary["max_link_error_m"] = map.MaxLinkError();
   summary["wall_seconds"] = description.wall_seconds;
   return summary;
