@@ -1,0 +1,220 @@
+// rslam-experience-map as a process on the test's own DDS domain: pose-cell actions in, the
+// robot's pose per action and map snapshots out.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common/bus/participant.h"
+#include "common/bus/publisher.h"
+#include "common/bus/subscriber.h"
+#include "tests/integration/occupancy/service_process.h"
+#include "tests/integration/pose_cells/scripted_actions.h"
+#include "tests/support/test_domain.h"
+
+namespace rslam {
+namespace {
+
+using namespace std::chrono_literals;
+using testing::ServiceProcess;
+using testing::TempDir;
+using testing::WaitUntil;
+
+const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-experience-map";
+
+msg::PoseCellAction Action(uint64_t seq, msg::ActionKind kind, uint32_t id, uint32_t from) {
+  msg::PoseCellAction a;
+  a.header = testing::ScriptedHeader(seq);
+  a.action_seq = seq;
+  a.kind = kind;
+  a.experience_id = id;
+  a.from_experience_id = from;
+  a.vtrans_mps = 1.0;
+  a.dt_s = 0.1;
+  return a;
+}
+
+constexpr uint32_t kNone = 0xffffffffu;
+
+class ExperienceMapServiceTest : public ::testing::Test {
+ protected:
+  ExperienceMapServiceTest() {
+    bus::BusConfig config;
+    config.domain_id = domain_.id();
+    participant_ = bus::Participant::Create(config);
+    action_pub_ = std::make_unique<bus::Publisher<msg::PoseCellAction>>(*participant_, bus::topics::kPoseCellsAction);
+    pose_sub_ = std::make_unique<bus::Subscriber<msg::ExperiencePose>>(*participant_, bus::topics::kExperienceMapPose);
+    map_sub_ = std::make_unique<bus::Subscriber<msg::ExperienceMap>>(*participant_, bus::topics::kExperienceMapMap);
+    status_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
+  }
+
+  std::unique_ptr<ServiceProcess> Start(std::vector<std::string> extra = {}) {
+    std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--state-dir", state_dir_.path().string(),
+                                  "--set", "service.heartbeat_period_s=0.2"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    auto process = std::make_unique<ServiceProcess>(kBinary, args);
+    const bool matched = WaitUntil(
+        [&] { return pose_sub_->MatchedPublishers() > 0 && map_sub_->MatchedPublishers() > 0; }, 10s);
+    EXPECT_TRUE(matched) << process->Output();
+    return process;
+  }
+
+  std::vector<msg::ExperiencePose> AwaitPoses(size_t n, std::chrono::milliseconds timeout = 10s) {
+    std::vector<msg::ExperiencePose> out;
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (out.size() < n && std::chrono::steady_clock::now() < deadline) {
+      if (auto p = pose_sub_->TakeOne(100ms)) out.push_back(*p);
+    }
+    return out;
+  }
+
+  std::optional<msg::ExperienceMap> AwaitMap(const std::function<bool(const msg::ExperienceMap&)>& pred,
+                                             std::chrono::milliseconds timeout = 10s) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (auto m = map_sub_->TakeOne(100ms); m && pred(*m)) return m;
+    }
+    return std::nullopt;
+  }
+
+  std::optional<msg::ServiceStatus> AwaitRejected(uint64_t min_rejected, std::chrono::milliseconds timeout = 5s) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      if (auto s = status_sub_->TakeOne(100ms);
+          s && s->service == "experience_map" && s->messages_rejected >= min_rejected)
+        return s;
+    }
+    return std::nullopt;
+  }
+
+  testing::TestDomain domain_;
+  TempDir state_dir_;
+  std::unique_ptr<bus::Participant> participant_;
+  std::unique_ptr<bus::Publisher<msg::PoseCellAction>> action_pub_;
+  std::unique_ptr<bus::Subscriber<msg::ExperiencePose>> pose_sub_;
+  std::unique_ptr<bus::Subscriber<msg::ExperienceMap>> map_sub_;
+  std::unique_ptr<bus::Subscriber<msg::ServiceStatus>> status_sub_;
+};
+
+TEST_F(ExperienceMapServiceTest, AppliesOutOfOrderAndDuplicatedActionsInSequenceOrder) {
+  auto service = Start();
+  const auto actions = testing::ScriptedActions(testing::ScriptedLoop(testing::kLapFrames + 20));
+  const testing::ReferenceMap reference = testing::ApplyAll(actions);
+  ASSERT_GE(reference.loop_closures, 1u);
+  // Neighbours swapped, every tenth action sent twice, and the first ten again at the end.
+  std::vector<msg::PoseCellAction> sent;
+  for (size_t i = 0; i + 1 < actions.size(); i += 2) {
+    sent.push_back(actions[i + 1]);
+    sent.push_back(actions[i]);
+    if (i % 10 == 0) sent.push_back(actions[i]);
+  }
+  if (actions.size() % 2) sent.push_back(actions.back());
+  for (size_t i = 0; i < 10; ++i) sent.push_back(actions[i]);
+  for (const auto& a : sent) action_pub_->Publish(a);
+
+  const auto poses = AwaitPoses(actions.size());
+  ASSERT_EQ(poses.size(), actions.size()) << service->Output();
+  for (size_t i = 0; i < poses.size(); ++i) {
+    EXPECT_EQ(poses[i].action_seq, i);
+    EXPECT_EQ(poses[i].header, actions[i].header);
+  }
+  EXPECT_FALSE(pose_sub_->TakeOne(300ms)) << "a duplicate was applied";
+  EXPECT_EQ(poses.back().experience_count, reference.experiences);
+  EXPECT_EQ(poses.back().link_count, reference.links.size());
+
+  const auto map = AwaitMap([&](const msg::ExperienceMap& m) { return m.action_seq == actions.size() - 1; });
+  ASSERT_TRUE(map) << service->Output();
+  ASSERT_EQ(map->experiences.size(), reference.experiences);
+  ASSERT_EQ(map->links.size(), reference.links.size());
+  size_t closures = 0;
+  for (size_t i = 0; i < map->links.size(); ++i) {
+    EXPECT_EQ(std::make_pair(map->links[i].from_id, map->links[i].to_id), reference.links[i]);
+    closures += map->links[i].closes_loop;
+  }
+  EXPECT_EQ(closures, reference.loop_closures);
+  for (size_t i = 0; i < map->experiences.size(); ++i) {
+    EXPECT_EQ(map->experiences[i].id, i);
+    EXPECT_NEAR(map->experiences[i].x_m, reference.positions[i].first, 1e-9);
+    EXPECT_NEAR(map->experiences[i].y_m, reference.positions[i].second, 1e-9);
+  }
+  EXPECT_EQ(map->current_experience_id, poses.back().current_experience_id);
+  // The pose of the current experience travels with every pose message.
+  const auto& current = map->experiences[map->current_experience_id];
+  EXPECT_NEAR(poses.back().experience_x_m, current.x_m, 1e-6);
+  EXPECT_TRUE(service->Running());
+}
+
+TEST_F(ExperienceMapServiceTest, ActionWithUnknownIdIsRejectedAndTheServiceKeepsRunning) {
+  auto service = Start();
+  action_pub_->Publish(Action(0, msg::ActionKind::ACTION_CREATE, 0, kNone));
+  action_pub_->Publish(Action(1, msg::ActionKind::ACTION_LINK, 99, 0));  // no experience 99
+  action_pub_->Publish(Action(2, msg::ActionKind::ACTION_CREATE, 1, 0));
+  msg::PoseCellAction bad = Action(3, msg::ActionKind::ACTION_NONE, kNone, kNone);
+  bad.dt_s = std::nan("");
+  action_pub_->Publish(bad);
+  action_pub_->Publish(Action(4, msg::ActionKind::ACTION_NONE, kNone, kNone));
+  const auto poses = AwaitPoses(4);  // the malformed one publishes nothing
+  ASSERT_EQ(poses.size(), 4u) << service->Output();
+  EXPECT_EQ(poses[1].action_seq, 1u);
+  EXPECT_EQ(poses[1].experience_count, 1u);  // the link was not applied
+  EXPECT_EQ(poses[2].experience_count, 2u);
+  EXPECT_EQ(poses[3].action_seq, 4u);
+  const auto status = AwaitRejected(2);
+  ASSERT_TRUE(status) << service->Output();
+  EXPECT_TRUE(service->Running());
+}
+
+TEST_F(ExperienceMapServiceTest, MissingActionIsSkippedAfterTheGapWindow) {
+  auto service = Start({"--set", "experience_map.gap_window_actions=5"});
+  action_pub_->Publish(Action(0, msg::ActionKind::ACTION_CREATE, 0, kNone));
+  for (uint64_t seq = 2; seq <= 8; ++seq) action_pub_->Publish(Action(seq, msg::ActionKind::ACTION_NONE, kNone, kNone));
+  const auto poses = AwaitPoses(8);
+  ASSERT_EQ(poses.size(), 8u) << service->Output();
+  EXPECT_EQ(poses[0].action_seq, 0u);
+  for (size_t i = 1; i < poses.size(); ++i) EXPECT_EQ(poses[i].action_seq, i + 1);
+  ASSERT_TRUE(AwaitRejected(1)) << service->Output();
+  action_pub_->Publish(Action(1, msg::ActionKind::ACTION_CREATE, 1, 0));  // too late: ignored
+  EXPECT_FALSE(pose_sub_->TakeOne(300ms));
+}
+
+TEST_F(ExperienceMapServiceTest, SavedMapFileLoadsIntoANewServiceAndItsSnapshot) {
+  const std::string map_file = (state_dir_.path() / "saved_map.pb").string();
+  const auto actions = testing::ScriptedActions(testing::ScriptedLoop(testing::kLapFrames + 5));
+  const testing::ReferenceMap reference = testing::ApplyAll(actions);
+  {
+    auto service = Start({"--set", "experience_map.save_map=" + map_file});
+    for (const auto& a : actions) action_pub_->Publish(a);
+    ASSERT_EQ(AwaitPoses(actions.size()).size(), actions.size()) << service->Output();
+    service->Signal(SIGTERM);
+    ASSERT_EQ(service->WaitExit(10s), std::optional<int>(0)) << service->Output();
+  }
+  ASSERT_TRUE(std::filesystem::exists(map_file));
+  TempDir other_state;
+  auto loaded = std::make_unique<ServiceProcess>(
+      kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--state-dir",
+                                        other_state.path().string(), "--set", "experience_map.load_map=" + map_file});
+  const auto map = AwaitMap([&](const msg::ExperienceMap& m) {
+    return m.experiences.size() == reference.experiences && m.action_seq == actions.size() - 1;
+  });
+  ASSERT_TRUE(map) << loaded->Output();
+  EXPECT_EQ(map->links.size(), reference.links.size());
+}
+
+TEST_F(ExperienceMapServiceTest, CorruptStateFileIsRefusedAtStart) {
+  std::ofstream(state_dir_.path() / "experience_map.pb") << "not a state file";
+  const auto [code, output] = testing::RunToExit(
+      kBinary, {"--domain", std::to_string(domain_.id()), "--state-dir", state_dir_.path().string()});
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("experience_map.pb"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace rslam
