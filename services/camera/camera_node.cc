@@ -1,5 +1,6 @@
 #include "services/camera/camera_node.h"
 
+#include <fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -11,6 +12,7 @@
 #include <thread>
 
 #include "common/node/shutdown_signal.h"
+#include "services/camera/downstream_pacer.h"
 #include "services/camera/frame_preparation.h"
 #include "services/camera/frame_source.h"
 #include "services/camera/image_message.h"
@@ -22,7 +24,14 @@ using Clock = std::chrono::steady_clock;
 class CameraNode::Impl {
  public:
   Impl(ServiceContext& context, const Config& config)
-      : context_(context), config_(config), preparation_(config), live_(config.source == "device") {}
+      : context_(context),
+        config_(config),
+        preparation_(config),
+        live_(config.source == "device"),
+        lockstep_(config.source != "sim" && config.source != "device" && config.rate_hz == 0 &&
+                  !config.lockstep_topics.empty()),
+        pacer_(static_cast<int>(config.lockstep_topics.size()), config.max_frames_in_flight,
+               Seconds(config.lockstep_timeout_s), Seconds(config.lockstep_startup_timeout_s)) {}
 
   ~Impl() { Stop(); }
 
@@ -37,6 +46,7 @@ class CameraNode::Impl {
       spdlog::info("republishing {} as {}", bus::topics::kSimCamera.name, bus::topics::kCameraImage.name);
       return;
     }
+    if (lockstep_) SubscribeLockstepTopics();
     source_ = OpenSource();
     spdlog::info("source: {}", source_->Describe());
     // The first frame is read and prepared here, so a source or crop that cannot work fails the
@@ -63,6 +73,60 @@ class CameraNode::Impl {
   void set_self(const std::shared_ptr<Impl>& self) { self_ = self; }
 
  private:
+  static Clock::duration Seconds(double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  }
+
+  void SubscribeLockstepTopics() {
+    namespace t = bus::topics;
+    std::weak_ptr<Impl> weak = self_;
+    for (std::size_t i = 0; i < config_.lockstep_topics.size(); ++i) {
+      const std::string& name = config_.lockstep_topics[i];
+      auto report = [weak, stage = static_cast<int>(i)](const auto& msg) {
+        if (auto self = weak.lock()) self->Report(stage, msg.header.frame_seq);
+      };
+      if (name == t::kOdometryVelocity.name) {
+        context_.Subscribe<msg::Velocity>(t::kOdometryVelocity, report);
+      } else if (name == t::kTemplatesView.name) {
+        context_.Subscribe<msg::ViewTemplate>(t::kTemplatesView, report);
+      } else if (name == t::kPoseCellsAction.name) {
+        context_.Subscribe<msg::PoseCellAction>(t::kPoseCellsAction, report);
+      } else if (name == t::kExperienceMapPose.name) {
+        context_.Subscribe<msg::ExperiencePose>(t::kExperienceMapPose, report);
+      } else if (name == t::kOccupancyProfile.name) {
+        context_.Subscribe<msg::ObstacleProfile>(t::kOccupancyProfile, report);
+      } else {
+        throw ConfigError("lockstep_topics", "unknown per-frame topic '" + name + "'");
+      }
+    }
+    spdlog::info("lockstep with {} ({} frames in flight)", fmt::join(config_.lockstep_topics, ", "),
+                 config_.max_frames_in_flight);
+  }
+
+  void Report(int stage, uint64_t frame_seq) {
+    {
+      std::lock_guard lock(mutex_);
+      pacer_.Report(stage, frame_seq, Clock::now());
+    }
+    wake_.notify_all();
+  }
+
+  // rate_hz 0 with lockstep topics: waits until the pipeline is close enough behind frame_seq.
+  // Returns false when stopped.
+  bool AwaitPipeline(uint64_t frame_seq) {
+    std::unique_lock lock(mutex_);
+    while (!stop_ && !pacer_.MayPublish(frame_seq, Clock::now())) {
+      // Timeouts of silent stages pass without a report: look again now and then.
+      wake_.wait_for(lock, std::chrono::milliseconds(50));
+    }
+    return !stop_;
+  }
+
+  void PacerStarted() {
+    std::lock_guard lock(mutex_);
+    pacer_.Start(Clock::now());
+  }
+
   std::unique_ptr<FrameSource> OpenSource() const {
     if (config_.source == "images") return OpenImageSequence(config_.path, config_.fps, config_.start_stamp_ns);
     if (config_.source == "video") return OpenVideoFile(config_.path);
@@ -155,6 +219,7 @@ class CameraNode::Impl {
       }
       if (period > Clock::duration::zero() && !live_ && !SleepUntil(started + period * static_cast<int64_t>(published)))
         return;
+      if (lockstep_ && !AwaitPipeline(frame->seq)) return;
       cv::Mat prepared;
       try {
         prepared = preparation_.Apply(frame->image);
@@ -164,7 +229,7 @@ class CameraNode::Impl {
         continue;
       }
       Publish(prepared, frame->seq, frame->stamp_ns);
-      ++published;
+      if (published++ == 0 && lockstep_) PacerStarted();
       frame.reset();
       if (period == Clock::duration::zero() && !live_) AwaitAcknowledgments();
     }
@@ -210,6 +275,8 @@ class CameraNode::Impl {
   const Config config_;
   const FramePreparation preparation_;
   const bool live_;
+  const bool lockstep_;
+  DownstreamPacer pacer_;  // guarded by mutex_
   std::weak_ptr<Impl> self_;
   std::shared_ptr<bus::Publisher<msg::Image>> publisher_;
   std::unique_ptr<FrameSource> source_;

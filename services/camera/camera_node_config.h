@@ -6,12 +6,15 @@
 //         frames, republished). Recorded sources (images, video) are stamped from the source,
 //         never from the wall clock, so a replay is deterministic.
 // Pacing of recorded sources: rate_hz > 0 publishes in real time at that rate; rate_hz = 0
-// publishes as fast as the readers take frames (after each frame the camera waits until every
-// matched reader acknowledged it). Devices pace themselves; sim frames are paced by the simulator.
+// publishes as fast as the readers take frames: after each frame the camera waits until every
+// matched reader acknowledged it, and (lockstep_topics) until the pipeline's per-frame outputs
+// are at most max_frames_in_flight behind, which is what makes it lossless for slow services.
+// Devices pace themselves; sim frames are paced by the simulator.
 
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "common/config/config_error.h"
 #include "services/occupancy/camera_model.h"
@@ -53,6 +56,11 @@ struct CameraNodeConfig {
   int wait_for_readers = 1;             // recorded sources: readers to wait for before frame 0
   double wait_for_readers_timeout_s = 10.0;
   double ack_timeout_s = 10.0;          // rate_hz 0: longest wait for one frame's acknowledgments
+  // rate_hz 0: per-frame outputs of the pipeline whose frame_seq paces the camera (downstream_pacer.h).
+  std::vector<std::string> lockstep_topics = {"odometry/velocity", "templates/view"};
+  int max_frames_in_flight = 4;         // below the sensor preset's depth (8): nothing is overwritten
+  double lockstep_timeout_s = 2.0;      // a stage silent this long is not waited for
+  double lockstep_startup_timeout_s = 5.0;  // a stage that never reported is waited for this long
   bool loop = false;                    // recorded sources: start again at the end
   CropConfig crop;
   bool grey = false;                    // publish mono8
@@ -74,6 +82,13 @@ struct CameraNodeConfig {
     v("wait_for_readers", wait_for_readers, "recorded sources: matched readers to wait for before the first frame");
     v("wait_for_readers_timeout_s", wait_for_readers_timeout_s, "how long to wait for them (then start anyway)");
     v("ack_timeout_s", ack_timeout_s, "rate_hz 0: longest wait for one frame's acknowledgments");
+    v("lockstep_topics", lockstep_topics,
+      "rate_hz 0: per-frame topics (odometry/velocity, templates/view, pose_cells/action, experience_map/pose, "
+      "occupancy/profile) whose frame_seq must catch up before more frames go out; [] = acknowledgments only");
+    v("max_frames_in_flight", max_frames_in_flight, "rate_hz 0: frames published ahead of the slowest stage (0..7)");
+    v("lockstep_timeout_s", lockstep_timeout_s, "rate_hz 0: a stage silent this long is not waited for");
+    v("lockstep_startup_timeout_s", lockstep_startup_timeout_s,
+      "rate_hz 0: how long a stage that never reported is waited for");
     v("loop", loop, "recorded sources: start again at the end (seq and stamps keep increasing)");
     v("crop", crop, "crop of the (corrected) image: x, y, width, height (0 = to the edge; all 0 = none)");
     v("grey", grey, "publish mono8 instead of the source's encoding");
@@ -97,9 +112,23 @@ struct CameraNodeConfig {
     Require(std::isfinite(wait_for_readers_timeout_s) && wait_for_readers_timeout_s >= 0,
             "wait_for_readers_timeout_s", "must be >= 0");
     Require(std::isfinite(ack_timeout_s) && ack_timeout_s > 0, "ack_timeout_s", "must be positive");
+    for (const auto& topic : lockstep_topics)
+      Require(IsLockstepTopic(topic), "lockstep_topics",
+              "unknown per-frame topic '" + topic +
+                  "' (odometry/velocity, templates/view, pose_cells/action, experience_map/pose, occupancy/profile)");
+    Require(max_frames_in_flight >= 0 && max_frames_in_flight <= 7, "max_frames_in_flight",
+            "must be in 0..7 (below the camera topic's keep-last depth of 8)");
+    Require(std::isfinite(lockstep_timeout_s) && lockstep_timeout_s > 0, "lockstep_timeout_s", "must be positive");
+    Require(std::isfinite(lockstep_startup_timeout_s) && lockstep_startup_timeout_s >= 0,
+            "lockstep_startup_timeout_s", "must be >= 0");
     crop.Validate();
     if (anti_vignetting || undistort) model.Validate();
     Require(max_pixels >= 1, "max_pixels", "must be >= 1");
+  }
+
+  static bool IsLockstepTopic(const std::string& topic) {
+    return topic == "odometry/velocity" || topic == "templates/view" || topic == "pose_cells/action" ||
+           topic == "experience_map/pose" || topic == "occupancy/profile";
   }
 };
 

@@ -49,9 +49,10 @@ class CameraServiceTest : public ::testing::Test {
     return images;
   }
 
+  // No pipeline runs in these tests: no lockstep unless a test asks for it (later --set wins).
   std::vector<std::string> Args(std::vector<std::string> extra) const {
     std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--set",
-                                  "service.heartbeat_period_s=0.2"};
+                                  "service.heartbeat_period_s=0.2", "--set", "camera.lockstep_topics=[]"};
     for (auto& e : extra) {
       args.push_back("--set");
       args.push_back("camera." + e);
@@ -85,17 +86,26 @@ TEST_F(CameraServiceTest, ImageFolderFramesArriveInOrderWithDeterministicStampsT
   EXPECT_FALSE(frames.TakeOne(200ms)) << "nothing after the last frame";
 }
 
-TEST_F(CameraServiceTest, RateZeroLosesNothingWithASlowSubscriber) {
+TEST_F(CameraServiceTest, RateZeroInLockstepLosesNothingForAStageThatFallsBehind) {
   constexpr int kFrames = 30;  // far more than the sensor preset's keep-last depth (8)
   WriteImages(kFrames, 32, 24);
+  // The test is a pipeline stage: it takes frames slowly and reports each on odometry/velocity.
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
-  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0"}));
+  bus::Publisher<msg::Velocity> done(*participant_, bus::topics::kOdometryVelocity);
+  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0",
+                                       "lockstep_topics=[odometry/velocity]", "max_frames_in_flight=4"}));
+  ASSERT_TRUE(frames.WaitForPublishers(1, 10s)) << camera.Output();
+  ASSERT_TRUE(done.WaitForSubscribers(1, 10s)) << camera.Output();
+  std::this_thread::sleep_for(1s);  // falls far behind at first: the camera must wait for it
   std::vector<uint64_t> seqs;
   while (seqs.size() < kFrames) {
     const auto frame = frames.TakeOne(10s);
     if (!frame) break;
     seqs.push_back(frame->header.frame_seq);
-    std::this_thread::sleep_for(30ms);  // a reader slower than the camera could go
+    std::this_thread::sleep_for(20ms);  // slower than the camera could go
+    msg::Velocity v;
+    v.header = frame->header;
+    done.Publish(v);
   }
   ASSERT_EQ(seqs.size(), static_cast<std::size_t>(kFrames)) << camera.Output();
   for (int i = 0; i < kFrames; ++i) EXPECT_EQ(seqs[i], static_cast<uint64_t>(i));
