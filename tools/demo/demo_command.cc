@@ -103,6 +103,9 @@ struct TickContext {
 }  // namespace
 
 int RunDemo(const DemoOptions& options) {
+  // Before any thread starts (the bus starts several): every thread must block the shutdown
+  // signals, or RequestShutdown's signal would kill the process instead of ending the wait.
+  BlockShutdownSignals();
   const auto wall_start = Clock::now();
   const std::string bin_dir = options.bin_dir.empty() ? launch::ExecutableDir() : options.bin_dir;
   const std::string config_path =
@@ -120,7 +123,7 @@ int RunDemo(const DemoOptions& options) {
     ApplyOverride(root, "sim.world_yaml=" + world);
     extra_args.insert(extra_args.end(), {"--set", "sim.world_yaml=" + world});
   }
-  if (options.wheel_odometry) extra_args.insert(extra_args.end(), {"--set", "odometry.source=wheel"});
+  if (options.wheel_odometry) extra_args.insert(extra_args.end(), {"--set", "odometry.use_wheel_odometry=true"});
   sim::SimNodeConfig sim_config;
   LoadConfigSection(root, "sim", sim_config);
   const std::string world_path = sim::ResolveWorldPath(sim_config.sim.world_yaml);
@@ -165,7 +168,6 @@ int RunDemo(const DemoOptions& options) {
   std::vector<std::string> notes;
   if (!record) notes.push_back("no recording: `rslam record` is not available in " + bin_dir);
 
-  BlockShutdownSignals();
   launch::ProcessSupervisor supervisor(profile.restart);
   std::ofstream events(out / "logs" / "demo.log");
   supervisor.OnEvent([&events](const std::string& e) { events << e << std::endl; });

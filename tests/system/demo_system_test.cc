@@ -1,0 +1,129 @@
+// The demo end to end, shortened: the simulator and the seven services as processes on the
+// test's own domain for about a minute; the results folder must hold every file and a
+// summary.json whose figures are present and sane.
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/support/test_domain.h"
+
+namespace rslam {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+// Runs a command to completion with its output in a file; kills it (and its process group, the
+// services it started) if it outlives the timeout or the test.
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;
+};
+
+CommandResult RunCommand(const std::vector<std::string>& command, const fs::path& log, std::chrono::seconds timeout) {
+  std::vector<std::string> storage = command;
+  std::vector<char*> argv;
+  for (auto& a : storage) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::setpgid(0, 0);
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+    }
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  CommandResult result;
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  int status = 0;
+  while (::waitpid(pid, &status, WNOHANG) != pid) {
+    if (std::chrono::steady_clock::now() >= deadline) {
+      ::kill(-pid, SIGKILL);
+      ::kill(pid, SIGKILL);
+      ::waitpid(pid, &status, 0);
+      status = -1;
+      break;
+    }
+    std::this_thread::sleep_for(100ms);
+  }
+  if (status != -1 && WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
+  std::ifstream in(log);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  result.output = ss.str();
+  return result;
+}
+
+// `rslam demo` when the command line has it, else the standalone driver.
+std::vector<std::string> DemoCommand() {
+  const std::string rslam = RSLAM_BINARY_DIR "/bin/rslam";
+  if (::access(rslam.c_str(), X_OK) == 0 && std::system(("'" + rslam + "' demo --help >/dev/null 2>&1").c_str()) == 0)
+    return {rslam, "demo"};
+  return {RSLAM_BINARY_DIR "/bin/rslam-demo-driver", "demo"};
+}
+
+TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
+  testing::TestDomain domain;
+  char pattern[] = "/tmp/rslam-demo-test-XXXXXX";
+  ASSERT_NE(::mkdtemp(pattern), nullptr);
+  const fs::path out = pattern;
+  std::vector<std::string> command = DemoCommand();
+  command.insert(command.end(), {"--out", out.string(), "--max-seconds", "60", "--domain", std::to_string(domain.id())});
+  const CommandResult run = RunCommand(command, out / "demo-output.txt", 240s);
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+
+  for (const char* file : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid.pgm", "grid.yaml"})
+    EXPECT_TRUE(fs::exists(out / file) && fs::file_size(out / file) > 0) << file << "\n" << run.output;
+  std::ifstream in(out / "summary.json");
+  ASSERT_TRUE(in.good());
+  const nlohmann::json summary = nlohmann::json::parse(in);
+  for (const char* key : {"complete", "coverage", "map_precision", "frames", "templates", "experiences", "links",
+                          "loop_closures", "loop_closure_precision", "ate_m", "ate_odometry_m", "wall_s", "dds"})
+    EXPECT_TRUE(summary.contains(key)) << key;
+  EXPECT_TRUE(summary["missing"].empty()) << summary.dump(2);
+  EXPECT_TRUE(summary["complete"].is_boolean());
+  EXPECT_GT(summary["frames"].get<int64_t>(), 0);
+  EXPECT_GT(summary["templates"].get<int64_t>(), 0);
+  EXPECT_GT(summary["experiences"].get<int64_t>(), 0);
+  EXPECT_LE(summary["loop_closures"].get<int64_t>(), summary["links"].get<int64_t>());
+  ASSERT_TRUE(summary["coverage"].is_number()) << summary.dump(2);
+  EXPECT_GT(summary["coverage"].get<double>(), 0.0);
+  EXPECT_LE(summary["coverage"].get<double>(), 1.0);
+  ASSERT_TRUE(summary["map_precision"].is_number());
+  EXPECT_GT(summary["map_precision"].get<double>(), 0.5);  // a grid mostly wrong is a broken pipeline
+  EXPECT_LE(summary["map_precision"].get<double>(), 1.0);
+  if (summary["loop_closure_precision"].is_number()) {
+    EXPECT_GE(summary["loop_closure_precision"].get<double>(), 0.0);
+    EXPECT_LE(summary["loop_closure_precision"].get<double>(), 1.0);
+  }
+  ASSERT_TRUE(summary["ate_m"].is_number());
+  EXPECT_GE(summary["ate_m"].get<double>(), 0.0);
+  ASSERT_TRUE(summary["ate_odometry_m"].is_number());
+  EXPECT_GE(summary["ate_odometry_m"].get<double>(), 0.0);
+  EXPECT_GT(summary["wall_s"].get<double>(), 0.0);
+  if (!summary["recording"].is_null()) EXPECT_TRUE(fs::exists(summary["recording"].get<std::string>()));
+  for (const auto& [name, process] : summary["processes"].items())
+    EXPECT_FALSE(process["gave_up"].get<bool>()) << name << " gave up";
+  std::error_code ignored;
+  if (!HasFailure()) fs::remove_all(out, ignored);  // kept for a look when the test fails
+}
+
+}  // namespace
+}  // namespace rslam
