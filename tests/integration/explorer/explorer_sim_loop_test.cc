@@ -59,6 +59,9 @@ TEST(ExplorerSimLoopTest, ExploresASimulatedRoomToCompletion) {
     std::ofstream out(config);
     out << "sim:\n  world_yaml: " << world << "\n  start_pose: [" << kStartX << ", " << kStartY << ", 0.0]\n"
         << "  max_frames: 6000\n"
+        // The sim's lockstep readers may match after the first frames' reports went out; it then
+        // waits startup_timeout_s before going on without them (15 s by default).
+        << "  startup_timeout_s: 3\n"
         << "service:\n  heartbeat_period_s: 0.5\n";
   }
 
