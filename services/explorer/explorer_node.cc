@@ -64,12 +64,23 @@ bool SameStatus(const msg::ExplorerStatus& a, const msg::ExplorerStatus& b) {
          a.commands_sent == b.commands_sent && a.goals_set_aside == b.goals_set_aside && a.reason == b.reason;
 }
 
+// Runs a subscriber callback; an exception (a bus write that stayed blocked, a bug) is logged
+// instead of ending the process from the subscriber's thread.
+template <class F>
+void Guarded(const char* input, F&& handle) {
+  try {
+    handle();
+  } catch (const std::exception& e) {
+    spdlog::error("while handling {}: {}", input, e.what());
+  }
+}
+
 }  // namespace
 
 class ExplorerNode::Controller {
  public:
   Controller(ServiceContext& context, const Config& config)
-      : context_(context), config_(config), planner_(config.planner), last_save_(Clock::now()) {
+      : context_(context), config_(config), last_save_(Clock::now()), planner_(config.planner) {
     LoadState();
     command_pub_ = context_.Advertise(bus::topics::kExplorerCommand);
     status_pub_ = context_.Advertise(bus::topics::kExplorerStatus);
@@ -81,12 +92,15 @@ class ExplorerNode::Controller {
   // controller) alive until after the node is gone, and Stop() makes late callbacks return.
   static void Subscribe(const std::shared_ptr<Controller>& self) {
     ServiceContext& ctx = self->context_;
-    ctx.Subscribe<msg::OccupancyGrid>(bus::topics::kOccupancyGrid,
-                                      [self](const msg::OccupancyGrid& m) { self->OnGrid(m); });
-    ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose,
-                                       [self](const msg::ExperiencePose& m) { self->OnPose(m); });
-    ctx.Subscribe<msg::MotionFeedback>(bus::topics::kMotionFeedback,
-                                       [self](const msg::MotionFeedback& m) { self->OnFeedback(m); });
+    ctx.Subscribe<msg::OccupancyGrid>(bus::topics::kOccupancyGrid, [self](const msg::OccupancyGrid& m) {
+      Guarded("grid", [&] { self->OnGrid(m); });
+    });
+    ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose, [self](const msg::ExperiencePose& m) {
+      Guarded("pose", [&] { self->OnPose(m); });
+    });
+    ctx.Subscribe<msg::MotionFeedback>(bus::topics::kMotionFeedback, [self](const msg::MotionFeedback& m) {
+      Guarded("feedback", [&] { self->OnFeedback(m); });
+    });
   }
 
   // A robot must not go on driving a plan nobody watches any more: an outstanding command is
@@ -232,7 +246,7 @@ class ExplorerNode::Controller {
       if (!plan_ || next_command_ >= plan_->commands.size()) {
         try {
           plan_ = planner_.PlanFrom(view, RobotPose());
-        } catch (const std::invalid_argument& e) {
+        } catch (const std::exception& e) {  // robot off the map, or a planner bug: say so, wait
           plan_.reset();
           reason_ = std::string("cannot plan: ") + e.what();
           PublishStatusIfChanged();

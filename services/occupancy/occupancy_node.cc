@@ -69,6 +69,17 @@ msg::ObstacleProfile ToMessage(const msg::Header& header, const AnchoredProfile&
   return out;
 }
 
+// Runs a subscriber callback; an exception (a bus write that stayed blocked, a bug) is logged
+// instead of ending the process from the subscriber's thread.
+template <class F>
+void Guarded(const char* input, F&& handle) {
+  try {
+    handle();
+  } catch (const std::exception& e) {
+    spdlog::error("while handling {}: {}", input, e.what());
+  }
+}
+
 }  // namespace
 
 class OccupancyNode::Mapper {
@@ -96,11 +107,14 @@ class OccupancyNode::Mapper {
   // the node, and Stop() makes late callbacks return at once.
   static void Subscribe(const std::shared_ptr<Mapper>& self) {
     ServiceContext& ctx = self->context_;
-    ctx.Subscribe<msg::Image>(bus::topics::kCameraImage, [self](const msg::Image& m) { self->OnImage(m); });
-    ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose,
-                                       [self](const msg::ExperiencePose& m) { self->OnPose(m); });
-    ctx.Subscribe<msg::ExperienceMap>(bus::topics::kExperienceMapMap,
-                                      [self](const msg::ExperienceMap& m) { self->OnMap(m); });
+    ctx.Subscribe<msg::Image>(bus::topics::kCameraImage,
+                              [self](const msg::Image& m) { Guarded("image", [&] { self->OnImage(m); }); });
+    ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose, [self](const msg::ExperiencePose& m) {
+      Guarded("pose", [&] { self->OnPose(m); });
+    });
+    ctx.Subscribe<msg::ExperienceMap>(bus::topics::kExperienceMapMap, [self](const msg::ExperienceMap& m) {
+      Guarded("map", [&] { self->OnMap(m); });
+    });
   }
 
   // Stops processing, then saves the state and exports the grid.
@@ -207,7 +221,7 @@ class OccupancyNode::Mapper {
     try {
       RadialObstacleProfile rop = pipeline_.ProfileFromImage(view);
       map_.AddProfile(pose.current_experience_id, experience, robot, std::move(rop));
-    } catch (const std::invalid_argument& e) {
+    } catch (const std::exception& e) {  // std::invalid_argument, or cv::Exception on odd input
       context_.Reject("frame", e.what());
       return;
     }
