@@ -65,6 +65,7 @@ struct RecordArgs {
   double split_size_mb = 0;
   double split_duration_s = 0;
   std::string compression = "zstd";
+  int zstd_level = 1;
   double duration_s = 0;
   double queue_mb = 1024;
   BusFlags bus;
@@ -113,6 +114,9 @@ void RegisterRecord(CLI::App& rslam) {
   cmd->add_option("--compression", args->compression, "chunk compression")
       ->capture_default_str()
       ->check(CLI::IsMember({"zstd", "lz4", "none"}));
+  cmd->add_option("--zstd-level", args->zstd_level, "zstd level: 1 is fast, negative faster, up to 19 smaller")
+      ->capture_default_str()
+      ->check(CLI::Range(-5, 19));
   cmd->add_option("--duration", args->duration_s, "stop after S seconds (default: until Ctrl-C)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--queue-mb", args->queue_mb, "memory for messages waiting to be written; beyond it they are dropped")
@@ -124,6 +128,7 @@ void RegisterRecord(CLI::App& rslam) {
     RecorderOptions options;
     options.file.path = args->output;
     options.file.compression = args->compression;
+    options.file.compression_level = args->zstd_level;
     options.file.split_bytes = static_cast<uint64_t>(std::llround(args->split_size_mb * 1e6));
     options.file.split_duration_ns = static_cast<uint64_t>(std::llround(args->split_duration_s * 1e9));
     options.topics_regex = args->topics;

@@ -12,6 +12,7 @@ mcap::McapWriterOptions WriterOptions(const RecordingFileOptions& o) {
   w.profile = mcap::kProfileRslam;
   w.compression = o.compression == "none" ? "" : o.compression;
   w.chunk_size = o.chunk_size;
+  w.compression_level = o.compression_level;
   w.Validate();
   return w;
 }

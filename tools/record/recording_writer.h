@@ -27,6 +27,7 @@ namespace rslam::record {
 struct RecordingFileOptions {
   std::string path;                  // the file; with splitting, the base of <base>_0000.mcap ...
   std::string compression = "zstd";  // "zstd", "lz4" or "none"
+  int compression_level = 1;         // zstd level: 1 fast; negative levels are faster still
   uint64_t split_bytes = 0;          // 0 = no size split
   uint64_t split_duration_ns = 0;    // 0 = no duration split
   int64_t chunk_size = 4 << 20;

@@ -125,11 +125,13 @@ void BM_RecordImagesThroughBus(benchmark::State& state) {
 }
 
 // The storage side alone: RecordingWriter (copy into the chunk, compress, write) per image.
+// range(0): 0 zstd, 1 lz4, 2 none; range(1): zstd level.
 void BM_WriteImages(benchmark::State& state) {
   const std::string compression = state.range(0) == 0 ? "zstd" : state.range(0) == 1 ? "lz4" : "none";
   RecordingFileOptions o;
   o.path = (BenchDir() / ("write_" + compression + ".mcap")).string();
   o.compression = compression;
+  o.compression_level = static_cast<int>(state.range(1));
   RecordingWriter w(o, "cyclone");
   std::vector<std::vector<uint8_t>> frames;
   for (uint64_t i = 0; i < 16; ++i) frames.push_back(ImageCdr(i));
@@ -145,7 +147,9 @@ void BM_WriteImages(benchmark::State& state) {
       n * frames[0].size() / 1e6 / (static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC);
   state.SetBytesProcessed(static_cast<int64_t>(n * frames[0].size()));
   state.SetItemsProcessed(static_cast<int64_t>(n));
-  state.SetLabel(compression + ", 640x480 bgr8");
+  state.counters["file_ratio"] = static_cast<double>(fs::file_size(o.path)) / (n * frames[0].size());
+  state.SetLabel(compression + (compression == "zstd" ? " level " + std::to_string(o.compression_level) : "") +
+                 ", 640x480 bgr8");
   fs::remove(o.path);
 }
 
@@ -205,7 +209,7 @@ void BM_PlayMax(benchmark::State& state) {
 }
 
 BENCHMARK(BM_RecordImagesThroughBus)->DenseRange(0, 2)->Iterations(2)->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_WriteImages)->DenseRange(0, 2)->UseRealTime()->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_WriteImages)->Args({0, 1})->Args({0, -3})->Args({1, 1})->Args({2, 1})->UseRealTime()->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_PlayMax)->DenseRange(0, 1)->Iterations(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace
