@@ -1,7 +1,11 @@
 #pragma once
 // The configuration of the whole RatSLAM core as one YAML document: the sections the four
-// services read (odometry, templates, pose_cells, experience_map), so a preset file
-// (deploy/presets/<name>.yaml) configures `rslam run` and the distributed services alike.
+// services read (odometry, templates, pose_cells, experience_map), filled into the services' own
+// node config structs, so a preset or service config file means the same to `rslam run` as to
+// the distributed services (same keys, same defaults, same validation). The runner uses the
+// algorithm keys and the node keys that change what reaches the algorithms
+// (odometry.max_frame_gap_s, pose_cells.max_dt_s / max_vtrans_mps / max_vrot_radps,
+// experience_map.max_dt_s); transport and persistence keys are accepted and have no effect.
 
 #include <yaml-cpp/yaml.h>
 
@@ -9,18 +13,18 @@
 #include <string>
 #include <vector>
 
-#include "services/experience_map/experience_map_config.h"
-#include "services/odometry/visual_odometry_config.h"
-#include "services/pose_cells/pose_cell_config.h"
-#include "services/templates/template_config.h"
+#include "services/experience_map/experience_map_node_config.h"
+#include "services/odometry/odometry_node_config.h"
+#include "services/pose_cells/pose_cells_node_config.h"
+#include "services/templates/templates_node_config.h"
 
 namespace rslam::run {
 
 struct RatSlamConfig {
-  odometry::VisualOdometryConfig odometry;
-  templates::TemplateConfig templates;
-  pose_cells::PoseCellConfig pose_cells;
-  experience_map::ExperienceMapConfig experience_map;
+  odometry::OdometryNodeConfig odometry;              // .visual: the visual odometry
+  templates::TemplatesNodeConfig templates;           // .library: the template library
+  pose_cells::PoseCellsNodeConfig pose_cells;         // .network: the pose-cell network
+  experience_map::ExperienceMapNodeConfig experience_map;  // .map: the experience map
 };
 
 // Fills every section from root over the defaults and validates. Throws ConfigError naming the

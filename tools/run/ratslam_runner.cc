@@ -1,5 +1,7 @@
 #include "tools/run/ratslam_runner.h"
 
+#include "tools/run/service_messages.h"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -19,33 +21,7 @@ double MicrosSince(Clock::time_point start) {
   return std::chrono::duration<double, std::micro>(Clock::now() - start).count();
 }
 
-experience_map::ExperienceAction::Kind ToExperienceKind(pose_cells::Action::Kind kind) {
-  using In = pose_cells::Action::Kind;
-  using Out = experience_map::ExperienceAction::Kind;
-  switch (kind) {
-    case In::kNone: return Out::kNone;
-    case In::kCreate: return Out::kCreate;
-    case In::kLink: return Out::kLink;
-    case In::kSet: return Out::kSet;
-  }
-  throw std::invalid_argument("unknown pose-cell action kind");
-}
-
 }  // namespace
-
-experience_map::ExperienceAction ToExperienceAction(const pose_cells::Action& a) {
-  experience_map::ExperienceAction e;
-  e.kind = ToExperienceKind(a.kind);
-  e.experience_id = a.experience_id;
-  e.from_experience_id = a.from_experience_id;
-  e.template_id = a.template_id;
-  e.relative_angle_rad = a.relative_angle_rad;
-  e.pc_x = a.pc_x;
-  e.pc_y = a.pc_y;
-  e.pc_th = a.pc_th;
-  e.sequence = a.sequence;
-  return e;
-}
 
 cv::Mat ToGrey(const cv::Mat& image) {
   if (image.empty()) throw std::invalid_argument("empty image");
@@ -71,53 +47,73 @@ cv::Mat ToGrey(const cv::Mat& image) {
 
 RatSlamRunner::RatSlamRunner(const RatSlamConfig& config)
     : config_(config),
-      odometry_(config.odometry),
-      templates_(config.templates),
-      pose_cells_(config.pose_cells),
-      map_(config.experience_map) {}
+      odometry_(config.odometry.visual),
+      templates_(config.templates.library),
+      pose_cells_(config.pose_cells.network),
+      map_(config.experience_map.map) {}
 
 FrameRecord RatSlamRunner::ProcessFrame(const cv::Mat& image, int64_t stamp_ns) {
+  if (has_previous_stamp_ && stamp_ns <= previous_stamp_ns_) {
+    throw std::invalid_argument("frame " + std::to_string(frames_) + ": stamp " + std::to_string(stamp_ns) +
+                                " ns is not after the previous frame's " + std::to_string(previous_stamp_ns_) + " ns");
+  }
   FrameRecord record;
   record.frame_index = frames_;
   record.stamp_ns = stamp_ns;
-  const bool first = !has_previous_stamp_;
-  if (!first) {
-    if (stamp_ns <= previous_stamp_ns_) {
-      throw std::invalid_argument("frame " + std::to_string(frames_) + ": stamp " + std::to_string(stamp_ns) +
-                                  " ns is not after the previous frame's " + std::to_string(previous_stamp_ns_) +
-                                  " ns");
-    }
-    record.dt_s = static_cast<double>(stamp_ns - previous_stamp_ns_) * 1e-9;
-  }
 
+  // Odometry service.
   auto start = Clock::now();
   const cv::Mat grey = ToGrey(image);
-  // The first frame only primes the odometry's profile: its velocity is zero whatever dt is, but
-  // Update still checks dt, so it gets the nominal period.
-  const double odometry_dt = first ? 1.0 / config_.odometry.camera_hz : record.dt_s;
-  record.velocity = odometry_.Update(grey, odometry_dt);
-  if (first) record.velocity = odometry::Velocity{};
-  record.micros.odometry = MicrosSince(start);
-
-  start = Clock::now();
-  record.view = templates_.MatchOrLearn(grey);
-  record.micros.templates = MicrosSince(start);
-
-  // Stamps are committed only once the image stages accepted the frame.
+  bool restart = !has_previous_stamp_;
+  if (!restart) {
+    record.dt_s = static_cast<double>(stamp_ns - previous_stamp_ns_) * 1e-9;
+    restart = grey.size() != previous_size_ || record.dt_s > config_.odometry.max_frame_gap_s;
+  }
+  if (restart) {
+    odometry_.Reset();
+    record.dt_s = 0.0;
+  }
+  record.velocity = odometry_.Update(grey, restart ? 1.0 / config_.odometry.visual.camera_hz : record.dt_s);
   has_previous_stamp_ = true;
   previous_stamp_ns_ = stamp_ns;
+  previous_size_ = grey.size();
+  record.micros.odometry = MicrosSince(start);
 
+  // Templates service.
   start = Clock::now();
-  record.action = pose_cells_.ProcessFrame(record.velocity.vtrans, record.velocity.vrot, record.dt_s,
-                                           record.view.template_id, record.view.is_new,
-                                           record.view.relative_angle_rad);
-  record.micros.pose_cells = MicrosSince(start);
+  record.view = templates_.MatchOrLearn(grey);
+  record.view.relative_angle_rad = PublishedRelativeAngle(record.view.relative_angle_rad);
+  record.micros.templates = MicrosSince(start);
 
-  start = Clock::now();
-  ApplyToMap(record.velocity, record.dt_s, record.action);
-  record.micros.experience_map = MicrosSince(start);
+  record.action = PoseCellsAndMap(record.velocity.vtrans, record.velocity.vrot, record.dt_s, stamp_ns, record.view);
+  record.micros.pose_cells = last_pose_cells_micros_;
+  record.micros.experience_map = last_map_micros_;
   ++frames_;
   return record;
+}
+
+pose_cells::Action RatSlamRunner::PoseCellsAndMap(double vtrans, double vrot, double dt_s, int64_t stamp_ns,
+                                                  const templates::ViewMatch& view) {
+  // Pose-cell service: odometry it would refuse as malformed is replaced by "no motion".
+  auto start = Clock::now();
+  const auto& limits = config_.pose_cells;
+  if (dt_s > limits.max_dt_s || std::abs(vtrans) > limits.max_vtrans_mps || std::abs(vrot) > limits.max_vrot_radps) {
+    ++refused_velocities_;
+    vtrans = vrot = 0.0;
+    dt_s = has_last_frame_ && stamp_ns > last_frame_stamp_ns_
+               ? std::min(limits.max_dt_s, static_cast<double>(stamp_ns - last_frame_stamp_ns_) * 1e-9)
+               : 0.0;
+  }
+  const pose_cells::Action action =
+      pose_cells_.ProcessFrame(vtrans, vrot, dt_s, view.template_id, view.is_new, view.relative_angle_rad);
+  has_last_frame_ = true;
+  last_frame_stamp_ns_ = stamp_ns;
+  last_pose_cells_micros_ = MicrosSince(start);
+
+  start = Clock::now();
+  ApplyToMap(action, vtrans, vrot, dt_s);
+  last_map_micros_ = MicrosSince(start);
+  return action;
 }
 
 pose_cells::Action RatSlamRunner::IntegrateMeasurements(const odometry::Velocity& velocity, double dt_s,
@@ -126,24 +122,36 @@ pose_cells::Action RatSlamRunner::IntegrateMeasurements(const odometry::Velocity
     throw std::invalid_argument("template " + std::to_string(view.template_id) + " is not in the library (" +
                                 std::to_string(templates_.size()) + " templates)");
   }
-  const pose_cells::Action action = pose_cells_.ProcessFrame(velocity.vtrans, velocity.vrot, dt_s, view.template_id,
-                                                             view.is_new, view.relative_angle_rad);
-  ApplyToMap(velocity, dt_s, action);
+  if (!std::isfinite(dt_s) || dt_s < 0) throw std::invalid_argument("dt must be finite and >= 0");
+  synthetic_stamp_ns_ += static_cast<int64_t>(dt_s * 1e9);
+  const pose_cells::Action action = PoseCellsAndMap(velocity.vtrans, velocity.vrot, dt_s, synthetic_stamp_ns_, view);
   ++frames_;
   return action;
 }
 
 uint32_t RatSlamRunner::LearnTemplate(const cv::Mat& image) { return templates_.Learn(ToGrey(image)); }
 
-void RatSlamRunner::ApplyToMap(const odometry::Velocity& velocity, double dt_s, const pose_cells::Action& action) {
-  map_.Integrate(velocity.vtrans, velocity.vrot, dt_s);
-  const experience_map::ExperienceAction applied = ToExperienceAction(action);
+void RatSlamRunner::ApplyToMap(const pose_cells::Action& action, double vtrans, double vrot, double dt_s) {
+  // The action as the experience-map service receives it; a message it would refuse (dt beyond
+  // its max_dt_s) keeps its place in the sequence but nothing of it is applied.
+  const msg::PoseCellAction message = PoseCellActionMessage(action, next_action_seq_++, vtrans, vrot, dt_s);
+  if (message.dt_s > config_.experience_map.max_dt_s) {
+    ++refused_actions_;
+    return;
+  }
+  map_.Integrate(message.vtrans_mps, message.vrot_radps, message.dt_s);
   const size_t links_before = map_.links().size();
-  map_.Apply(applied);
-  if (action.kind == pose_cells::Action::Kind::kLink) {
+  try {
+    map_.Apply(ExperienceActionFromMessage(message));
+  } catch (const std::invalid_argument&) {
+    ++refused_actions_;
+    map_.Apply(experience_map::ExperienceAction{});  // the frame's correction budget is still spent
+    return;
+  }
+  if (message.kind == msg::ActionKind::ACTION_LINK) {
     ++loop_closures_;
     if (map_.links().size() > links_before) {
-      loop_closure_links_.emplace(action.from_experience_id, action.experience_id);
+      loop_closure_links_.emplace(message.from_experience_id, message.experience_id);
     }
   }
 }

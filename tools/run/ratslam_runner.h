@@ -1,16 +1,25 @@
 #pragma once
 // The four RatSLAM stages in one process, one camera frame at a time: exactly the calls the
 // distributed services make, in the same order and with the same arguments, so `rslam run` on a
-// recording builds the same map as the services on the bus.
+// recording builds the same map as the services on the bus. Per frame (ProcessFrame):
 //
-// Per frame (ProcessFrame):
-//   grey     = the frame as CV_8UC1 (cv::cvtColor BGR2GRAY / BGRA2GRAY; mono as is)
-//   velocity = VisualOdometry::Update(grey, dt)            (odometry service)
-//   view     = TemplateLibrary::MatchOrLearn(grey)          (templates service)
-//   action   = PoseCellNetwork::ProcessFrame(velocity, dt, view)   (pose-cell service, joined by frame)
-//   ExperienceMap::Integrate(velocity, dt); Apply(action)   (experience-map service, every frame)
-// dt is the difference of consecutive frame stamps. The first frame has no previous frame: it
-// reports zero velocity and dt 0 (the odometry still sees it, to keep its profile).
+//   grey = the frame as CV_8UC1 (cv::cvtColor BGR2GRAY; mono as is)      as camera::GreyImage
+//   odometry service (OdometryNode::OnImage):
+//     dt = stamp - previous stamp; the first frame, a frame after a gap > max_frame_gap_s and a
+//     frame of another size restart the odometry: VisualOdometry::Reset, velocity 0, dt 0
+//     (Update still sees the frame, with dt = 1 / camera_hz, to keep its profile).
+//     velocity = VisualOdometry::Update(grey, dt)
+//   templates service (TemplatesNode::OnImage):
+//     view = TemplateLibrary::MatchOrLearn(grey); a non-finite relative angle is sent as 0
+//   pose-cell service (PoseCellsNode::ProcessFrame, velocity and view joined by frame):
+//     odometry outside pose_cells.max_dt_s / max_vtrans_mps / max_vrot_radps is refused: the
+//     frame then integrates no motion over min(max_dt_s, stamp difference);
+//     action = PoseCellNetwork::ProcessFrame(vtrans, vrot, dt, template_id, is_new, angle),
+//     sent as msg::PoseCellAction (service_messages.h) with the odometry it integrated
+//   experience-map service (ExperienceMapNode::Apply), every frame's action message:
+//     refused whole when its dt is beyond experience_map.max_dt_s; else
+//     ExperienceMap::Integrate(vtrans, vrot, dt), then Apply(action) (an action with ids that
+//     do not fit is counted and replaced by an empty one, so the correction budget is spent).
 //
 // Deterministic: the map depends only on the frames and their stamps. Stage times are measured
 // (steady clock) but never influence the result.
@@ -56,9 +65,6 @@ struct RelaxResult {
   double last_change_m = 0.0;     // change of rms_link_error_m over the last batch
 };
 
-// The action as the experience map receives it (same fields as the pose cells' action).
-experience_map::ExperienceAction ToExperienceAction(const pose_cells::Action& action);
-
 // The frame as CV_8UC1: BGR (3 channels) and BGRA (4) converted, grey returned as is (no copy).
 // Throws std::invalid_argument for an empty image, a depth other than 8 bits, or 2 channels.
 cv::Mat ToGrey(const cv::Mat& image);
@@ -69,13 +75,15 @@ class RatSlamRunner {
   RatSlamRunner(const RatSlamRunner&) = delete;
   RatSlamRunner& operator=(const RatSlamRunner&) = delete;
 
-  // One camera frame through the four stages. Throws std::invalid_argument (nothing changed)
-  // on a bad image (see ToGrey; a size change mid-stream) or a stamp not after the previous one.
+  // One camera frame through the four stages. Throws std::invalid_argument on a bad image (see
+  // ToGrey; nothing changed), a stamp not after the previous one (nothing changed), or an image
+  // a stage cannot use (e.g. smaller than a crop: the run should stop there).
   FrameRecord ProcessFrame(const cv::Mat& image, int64_t stamp_ns);
 
   // The pose-cell and experience-map half of a frame, from a velocity and a view the caller
   // measured (for tools and benchmarks that prefill a map without images; the template library
-  // must have learnt view.template_id already). Returns the pose cells' action.
+  // must have learnt view.template_id already). Frames are stamped dt_s apart. Returns the pose
+  // cells' action.
   pose_cells::Action IntegrateMeasurements(const odometry::Velocity& velocity, double dt_s,
                                            const templates::ViewMatch& view);
   // Learns a view as a new template without a frame (prefilling); report it to
@@ -98,11 +106,18 @@ class RatSlamRunner {
   uint64_t frames_processed() const { return frames_; }
   // kLink actions applied: places recognised and linked (loop closures).
   uint64_t loop_closures() const { return loop_closures_; }
+  // Frames whose odometry the pose-cell stage refused, and actions the experience map refused
+  // (as the services count them); both 0 on a healthy run.
+  uint64_t refused_velocities() const { return refused_velocities_; }
+  uint64_t refused_actions() const { return refused_actions_; }
   // (from, to) of every link a loop closure created.
   const std::set<std::pair<uint32_t, uint32_t>>& loop_closure_links() const { return loop_closure_links_; }
 
  private:
-  void ApplyToMap(const odometry::Velocity& velocity, double dt_s, const pose_cells::Action& action);
+  // The pose-cell and experience-map services' part of a frame.
+  pose_cells::Action PoseCellsAndMap(double vtrans, double vrot, double dt_s, int64_t stamp_ns,
+                                     const templates::ViewMatch& view);
+  void ApplyToMap(const pose_cells::Action& action, double vtrans, double vrot, double dt_s);
 
   const RatSlamConfig config_;
   odometry::VisualOdometry odometry_;
@@ -110,9 +125,18 @@ class RatSlamRunner {
   pose_cells::PoseCellNetwork pose_cells_;
   experience_map::ExperienceMap map_;
   uint64_t frames_ = 0;
-  bool has_previous_stamp_ = false;
+  bool has_previous_stamp_ = false;  // odometry service
   int64_t previous_stamp_ns_ = 0;
+  cv::Size previous_size_;
+  bool has_last_frame_ = false;  // pose-cell service
+  int64_t last_frame_stamp_ns_ = 0;
+  uint64_t next_action_seq_ = 0;
+  uint64_t refused_velocities_ = 0;
+  uint64_t refused_actions_ = 0;
   uint64_t loop_closures_ = 0;
+  int64_t synthetic_stamp_ns_ = 0;  // IntegrateMeasurements' frames
+  double last_pose_cells_micros_ = 0.0;
+  double last_map_micros_ = 0.0;
   std::set<std::pair<uint32_t, uint32_t>> loop_closure_links_;
 };
 

@@ -78,7 +78,7 @@ int Run(const RunOptions& options, std::ostream& out, std::ostream& err) {
   if (options.max_frames < 0) throw CommandFailure(kExitConfig, "--max-frames must be >= 0");
 
   const RatSlamConfig config = LoadConfig(options);
-  const double fps = options.fps.value_or(config.odometry.camera_hz);
+  const double fps = options.fps.value_or(config.odometry.visual.camera_hz);
   // Video stamps come from the file unless a rate is forced.
   const bool stamps_from_rate = !options.images.empty() || options.fps.has_value();
   std::unique_ptr<camera::FrameSource> source = OpenSource(options, fps);

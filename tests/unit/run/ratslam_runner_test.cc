@@ -5,9 +5,11 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "synthetic_loop.h"
+#include "tools/run/service_messages.h"
 
 namespace rslam::run {
 namespace {
@@ -111,8 +113,6 @@ TEST(RatSlamRunner, RejectsBadFramesAndStampsWithoutChangingState) {
   EXPECT_THROW(runner.ProcessFrame(cv::Mat(), kPeriodNs), std::invalid_argument);
   EXPECT_THROW(runner.ProcessFrame(cv::Mat(480, 640, CV_16UC1, cv::Scalar(0)), kPeriodNs), std::invalid_argument);
   EXPECT_THROW(runner.ProcessFrame(cv::Mat(480, 640, CV_8UC2, cv::Scalar(0)), kPeriodNs), std::invalid_argument);
-  EXPECT_THROW(runner.ProcessFrame(cv::Mat(240, 320, CV_8UC1, cv::Scalar(0)), kPeriodNs), std::invalid_argument)
-      << "size change mid-stream";
   EXPECT_THROW(runner.ProcessFrame(loop.Frame(1), 0), std::invalid_argument) << "stamp not after the previous";
   EXPECT_THROW(runner.ProcessFrame(loop.Frame(1), -5), std::invalid_argument);
   EXPECT_EQ(runner.frames_processed(), 1u);
@@ -140,6 +140,63 @@ TEST(RatSlamRunner, PrefilledTemplatesAndMeasurementsBuildAMap) {
                std::invalid_argument);
 }
 
+TEST(RatSlamRunner, AGapBeyondMaxFrameGapRestartsTheOdometryAsTheServiceDoes) {
+  RatSlamConfig config = LoopConfig();
+  config.odometry.max_frame_gap_s = 1.0;
+  RatSlamRunner runner(config);
+  const SyntheticLoop loop(36);
+  runner.ProcessFrame(loop.Frame(0), 0);
+  EXPECT_GT(runner.ProcessFrame(loop.Frame(1), kPeriodNs).velocity.vrot, 0.0);
+  const FrameRecord after_gap = runner.ProcessFrame(loop.Frame(2), kPeriodNs + 2'000'000'000);
+  EXPECT_EQ(after_gap.dt_s, 0.0);
+  EXPECT_EQ(after_gap.velocity.vtrans, 0.0);
+  EXPECT_EQ(after_gap.velocity.vrot, 0.0);
+  EXPECT_GT(runner.ProcessFrame(loop.Frame(3), 2 * kPeriodNs + 2'000'000'000).velocity.vrot, 0.0)
+      << "the next frame measures motion again";
+}
+
+TEST(RatSlamRunner, OdometryThePoseCellServiceWouldRefuseMovesNothing) {
+  RatSlamConfig config = LoopConfig();
+  config.pose_cells.max_vrot_radps = 0.5;  // the loop turns at 10 degrees per 0.1 s = 1.75 rad/s
+  RatSlamRunner runner(config);
+  const SyntheticLoop loop(36);
+  for (int i = 0; i < 10; ++i) runner.ProcessFrame(loop.Frame(i), i * kPeriodNs);
+  EXPECT_EQ(runner.refused_velocities(), 9u);
+  EXPECT_EQ(runner.refused_actions(), 0u);
+  // No motion reached the map: every experience is where the first one is.
+  for (const auto& e : runner.experience_map().experiences()) {
+    EXPECT_EQ(e.x_m, 0.0);
+    EXPECT_EQ(e.y_m, 0.0);
+  }
+}
+
+TEST(ServiceMessages, ActionsTravelAsTheServicesSendThem) {
+  pose_cells::Action action;
+  action.kind = pose_cells::Action::Kind::kLink;
+  action.experience_id = 3;
+  action.from_experience_id = 9;
+  action.template_id = 2;
+  action.pc_x = 1.23456789012345;
+  action.pc_y = 20.5;
+  action.pc_th = 35.1;
+  action.relative_angle_rad = 0.25;
+  const msg::PoseCellAction message = PoseCellActionMessage(action, 41, 1.5, -0.2, 0.1);
+  EXPECT_EQ(message.kind, msg::ActionKind::ACTION_LINK);
+  EXPECT_EQ(message.action_seq, 41u);
+  EXPECT_EQ(message.vtrans_mps, 1.5);
+  EXPECT_EQ(message.dt_s, 0.1);
+  const experience_map::ExperienceAction applied = ExperienceActionFromMessage(message);
+  EXPECT_EQ(applied.kind, experience_map::ExperienceAction::Kind::kLink);
+  EXPECT_EQ(applied.experience_id, 3u);
+  EXPECT_EQ(applied.from_experience_id, 9u);
+  EXPECT_EQ(applied.template_id, 2u);
+  EXPECT_EQ(applied.sequence, 41u) << "the message counter, as the experience-map service uses";
+  EXPECT_EQ(applied.pc_x, static_cast<double>(static_cast<float>(action.pc_x))) << "float on the wire";
+  EXPECT_NE(applied.pc_x, action.pc_x);
+  EXPECT_EQ(PublishedRelativeAngle(std::numeric_limits<double>::infinity()), 0.0);
+  EXPECT_EQ(PublishedRelativeAngle(-0.5), -0.5);
+}
+
 TEST(RatSlamConfig, UnknownSectionAndKeyAreNamed) {
   try {
     RatSlamConfigFromYaml(YAML::Load("odometri:\n  camera_hz: 5\n"));
@@ -154,15 +211,19 @@ TEST(RatSlamConfig, UnknownSectionAndKeyAreNamed) {
     EXPECT_EQ(e.key(), "pose_cells.pc_dim_xyz");
   }
   EXPECT_NO_THROW(RatSlamConfigFromYaml(YAML::Load("bus:\n  anything: 1\n"))) << "other services' sections";
+  // The services' own keys are keys of the same sections.
+  const RatSlamConfig node_keys =
+      RatSlamConfigFromYaml(YAML::Load("odometry:\n  max_frame_gap_s: 30\npose_cells:\n  join_window_frames: 5\n"));
+  EXPECT_EQ(node_keys.odometry.max_frame_gap_s, 30.0);
 }
 
 TEST(RatSlamConfig, ConfigFileOverPresetThenOverrides) {
   YAML::Node base = YAML::Load("templates:\n  match_threshold: 0.1\n  shift_match: 3\n");
   MergeYaml(base, YAML::Load("templates:\n  shift_match: 4\nodometry:\n  camera_hz: 5\n"));
   const RatSlamConfig config = RatSlamConfigFromYaml(base);
-  EXPECT_EQ(config.templates.match_threshold, 0.1);
-  EXPECT_EQ(config.templates.shift_match, 4);
-  EXPECT_EQ(config.odometry.camera_hz, 5.0);
+  EXPECT_EQ(config.templates.library.match_threshold, 0.1);
+  EXPECT_EQ(config.templates.library.shift_match, 4);
+  EXPECT_EQ(config.odometry.visual.camera_hz, 5.0);
 }
 
 }  // namespace
