@@ -1,5 +1,6 @@
 #include "tools/record/player.h"
 
+#include <algorithm>
 #include <cmath>
 #include <condition_variable>
 #include <memory>
@@ -244,8 +245,9 @@ PlayReport PlayFiles(bus::Participant& participant, const std::vector<std::strin
   } catch (const PlaybackStopped&) {
     report.stopped = true;
   }
-  // Deliver the tail before the writers go away.
-  for (auto& out : outputs) out.writer->WaitForAcknowledgments(options.ack_timeout);
+  // Deliver the tail before the writers go away (briefly when interrupted: the user wants out).
+  const auto tail = report.stopped ? std::min(options.ack_timeout, std::chrono::milliseconds(1000)) : options.ack_timeout;
+  for (auto& out : outputs) out.writer->WaitForAcknowledgments(tail);
   for (const auto& out : outputs) report.channels.push_back(out.info);
   return report;
 }
