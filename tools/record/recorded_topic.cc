@@ -19,8 +19,8 @@ RecordedTopic Entry(const bus::Topic<T>& topic) {
 
 const std::vector<RecordedTopic>& TopicTable() {
   // topics.h declares its topics as separate constants (no list to iterate), so they are
-  // enumerated here; a topic added there must be added here too (record_topic_table_test pins
-  // that every message type of the registry has a topic).
+  // enumerated here; a topic added there must be added here too (the RecordedTopicTable tests
+  // pin that every message type of the registry has a topic).
   namespace t = bus::topics;
   static const std::vector<RecordedTopic> table = {
       Entry(t::kCameraImage),       Entry(t::kOdometryVelocity), Entry(t::kWheelOdometry),
