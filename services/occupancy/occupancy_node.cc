@@ -154,7 +154,6 @@ class OccupancyNode::Mapper {
       context_.Reject("pose", "experience pose has a non-finite number");
       return;
     }
-    latest_map_version_ = std::max(latest_map_version_, pose.map_version);
     auto joined = joiner_.AddB(pose.header.frame_seq, pose);
     CountDropped();
     if (joined) ProcessFrame(joined->a, joined->b);
@@ -173,7 +172,6 @@ class OccupancyNode::Mapper {
       }
       correction.poses[e.id] = {e.x_m, e.y_m, e.theta_rad};
     }
-    latest_map_version_ = std::max(latest_map_version_, map.map_version);
     if (rebuilt_version_ && map.map_version <= *rebuilt_version_) return;
     if (pending_correction_ && map.map_version <= pending_correction_->map_version) return;
     pending_correction_ = std::move(correction);
@@ -187,6 +185,7 @@ class OccupancyNode::Mapper {
     const PendingCorrection correction = std::move(*pending_correction_);
     pending_correction_.reset();
     rebuilt_version_ = correction.map_version;
+    latest_map_version_ = std::max(latest_map_version_, correction.map_version);
     if (!AnchorsMoved(correction.poses)) return;
     const auto lookup = [&correction](uint64_t id) -> std::optional<Pose2D> {
       if (auto it = correction.poses.find(id); it != correction.poses.end()) return it->second;
@@ -226,6 +225,7 @@ class OccupancyNode::Mapper {
       return;
     }
     dirty_ = true;
+    latest_map_version_ = std::max(latest_map_version_, pose.map_version);
     last_header_ = pose.header;
     context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
     profile_pub_->Publish(
@@ -313,7 +313,7 @@ class OccupancyNode::Mapper {
   AnchoredProfileMap map_;
   FrameJoiner<msg::Image, msg::ExperiencePose> joiner_;
   uint64_t reported_dropped_ = 0;
-  uint64_t latest_map_version_ = 0;
+  uint64_t latest_map_version_ = 0;  // newest experience-map version the grid reflects
   std::optional<uint64_t> rebuilt_version_;
   struct PendingCorrection {
     uint64_t map_version = 0;

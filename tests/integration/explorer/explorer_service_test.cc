@@ -82,13 +82,14 @@ class ExplorerServiceTest : public ::testing::Test {
     heartbeat_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
   }
 
-  std::unique_ptr<ServiceProcess> Start() {
+  std::unique_ptr<ServiceProcess> Start(const std::vector<std::string>& extra = {}) {
+    std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--state-dir", state_dir_.path().string(),
+                                  "--set", "service.heartbeat_period_s=0.2", "--set",
+                                  "explorer.fresh_grid_timeout_s=0.3"};
+    args.insert(args.end(), extra.begin(), extra.end());
     const int poses = pose_pub_->MatchedSubscribers(), feedback = feedback_pub_->MatchedSubscribers();
     const int commands = command_sub_->MatchedPublishers();
-    auto process = std::make_unique<ServiceProcess>(
-        kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--state-dir",
-                                          state_dir_.path().string(), "--set", "service.heartbeat_period_s=0.2",
-                                          "--set", "explorer.fresh_grid_timeout_s=0.3"});
+    auto process = std::make_unique<ServiceProcess>(kBinary, args);
     const bool matched = WaitUntil(
         [&] {
           return pose_pub_->MatchedSubscribers() > poses && feedback_pub_->MatchedSubscribers() > feedback &&
@@ -231,6 +232,20 @@ TEST_F(ExplorerServiceTest, LooksBeforeMovingAndDoesNotDriveIntoANewWall) {
   ASSERT_TRUE(next) << service->Output();
   EXPECT_NE(next->kind, msg::MotionKind::MOTION_MOVE)
       << "drove into the wall it could see: turned " << turn->angle_rad << ", then moved " << next->distance_m;
+}
+
+TEST_F(ExplorerServiceTest, UnansweredCommandIsPlannedAgainAfterTheTimeout) {
+  auto service = Start({"--set", "explorer.feedback_timeout_s=0.5"});
+  pose_pub_->Publish(RobotAt(0, 0, 0));
+  grid_pub_->Publish(PartlyExploredGrid());
+  const auto first = NextCommand();
+  ASSERT_TRUE(first) << service->Output();
+  // The base never answers: the explorer gives up on the command and plans afresh.
+  const auto again = NextCommand(5s);
+  ASSERT_TRUE(again) << service->Output();
+  EXPECT_GT(again->command_seq, first->command_seq);
+  EXPECT_TRUE(AwaitStatus([](const msg::ExplorerStatus& s) { return s.reason.find("no feedback") != std::string::npos; }))
+      << service->Output();
 }
 
 TEST_F(ExplorerServiceTest, MalformedGridIsCountedAndTheServiceKeepsRunning) {

@@ -18,6 +18,8 @@
 #include "common/bus/subscriber.h"
 #include "tests/integration/occupancy/service_process.h"
 #include "tests/support/test_domain.h"
+#include <opencv2/imgproc.hpp>
+
 #include "tools/sim/camera_renderer.h"
 #include "tools/sim/world_map.h"
 
@@ -225,6 +227,63 @@ TEST_F(OccupancyServiceTest, CorrectedExperienceMovesTheOccupiedCells) {
   ASSERT_TRUE(moved) << service->Output();
   EXPECT_GE(MaxAlongX(*moved, kWallX + 0.5 - 0.1, kWallX + 0.5 + 0.1), 65) << "wall not at its corrected place";
   EXPECT_LE(MaxAlongX(*moved, kWallX - 0.1, kWallX + 0.1), 19) << "old wall position should now be free floor";
+}
+
+TEST_F(OccupancyServiceTest, WhileTheMapKeepsCorrectingItRebuildsAtMostEveryNFrames) {
+  auto service = Start({"--set", "occupancy.grid_publish_every_n_frames=1", "--set",
+                        "occupancy.rebuild_at_most_every_n_frames=5"});
+  for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+  auto correction = [](uint64_t version, double experience_x) {
+    msg::ExperienceMap map;
+    map.header = {"robot1", 10, 1'000'000'000};
+    map.map_version = version;
+    msg::Experience e;
+    e.id = 1;
+    e.x_m = experience_x;
+    map.experiences.push_back(e);
+    return map;
+  };
+  map_pub_->Publish(correction(2, 0.5));  // the first correction is applied at once
+  ASSERT_TRUE(AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 2; })) << service->Output();
+  map_pub_->Publish(correction(3, 0.0));  // the next one waits for 5 frames since the rebuild
+  ASSERT_TRUE(map_pub_->WaitForAcknowledgments(5s));
+  for (uint64_t seq = 11; seq <= 13; ++seq) {
+    ASSERT_TRUE(SendFrame(seq)) << service->Output();
+    const auto grid = AwaitGrid([seq](const msg::OccupancyGrid& g) { return g.header.frame_seq == seq; });
+    ASSERT_TRUE(grid) << service->Output();
+    EXPECT_EQ(grid->map_version, 2u) << "rebuilt again after " << seq - 10 << " frames";
+  }
+  for (uint64_t seq = 14; seq <= 15; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+  const auto rebuilt = AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 3; });
+  ASSERT_TRUE(rebuilt) << service->Output();
+  EXPECT_EQ(rebuilt->header.frame_seq, 15u);
+  EXPECT_TRUE(ShowsWallAhead(*rebuilt, kWallX)) << "the wall is back where the experience went back";
+}
+
+TEST_F(OccupancyServiceTest, AcceptsMonoImages) {
+  auto service = Start();
+  const cv::Mat bgr = renderer_.Render(sim::Pose2D{}, 1);
+  cv::Mat grey;
+  cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
+  msg::Image image;
+  image.header = {"robot1", 1, 100'000'000};
+  image.width = static_cast<uint32_t>(grey.cols);
+  image.height = static_cast<uint32_t>(grey.rows);
+  image.encoding = "mono8";
+  image.step = static_cast<uint32_t>(grey.cols);
+  image.data.assign(grey.data, grey.data + grey.total());
+  pose_pub_->Publish(Pose(1, 0, 0, 0));
+  image_pub_->Publish(image);
+  std::optional<msg::ObstacleProfile> profile;
+  ASSERT_TRUE(WaitUntil(
+      [&] {
+        profile = profile_sub_->TakeOne(100ms);
+        return profile.has_value();
+      },
+      5s))
+      << service->Output();
+  EXPECT_EQ(profile->header.frame_seq, 1u);
+  EXPECT_FALSE(profile->ranges_m.empty());
 }
 
 TEST_F(OccupancyServiceTest, MalformedInputIsCountedAndTheServiceKeepsWorking) {
