@@ -53,12 +53,15 @@ class OdometryNode::Impl {
     if (stopped_) return;
     const std::string problem = camera::ImageMessageProblem(image, static_cast<uint64_t>(config_.max_pixels));
     if (!problem.empty()) return context_.Reject("malformed_image", problem);
-    if (previous_stamp_ns_ && image.header.stamp_ns <= *previous_stamp_ns_)
+    // Frame 0 is a camera's first frame: a restarted camera begins a new run, whose stamps may
+    // start below the old run's (a replayed recording).
+    const bool new_camera_run = image.header.frame_seq == 0;
+    if (previous_stamp_ns_ && !new_camera_run && image.header.stamp_ns <= *previous_stamp_ns_)
       return context_.Reject("stamp_not_increasing", "frame " + std::to_string(image.header.frame_seq) + " stamp " +
                                                          std::to_string(image.header.stamp_ns) + " ns is not after " +
                                                          std::to_string(*previous_stamp_ns_) + " ns");
     const cv::Mat grey = camera::GreyImage(image);
-    bool restart = !previous_stamp_ns_;
+    bool restart = !previous_stamp_ns_ || new_camera_run;
     double dt_s = 0.0;
     if (previous_stamp_ns_) {
       dt_s = static_cast<double>(image.header.stamp_ns - *previous_stamp_ns_) * 1e-9;

@@ -10,7 +10,8 @@
 // the first after a restart of the visual odometry) is answered with zero velocity and dt 0, so
 // every camera frame has exactly one velocity and the pose cells can join by frame number. The
 // visual odometry restarts that way when the image size changes or when a frame comes more than
-// max_frame_gap_s after the previous one (the gap is also counted as rejected).
+// max_frame_gap_s after the previous one (the gap is also counted as rejected), and at frame_seq
+// 0 (a restarted camera starts a new run; its stamps may begin below the old run's).
 // Rejected (counted, logged once per kind, dropped, the service keeps running): images whose
 // sizes disagree with width/height/step/encoding, unknown encodings, more than max_pixels
 // pixels, stamps that do not increase, frames the odometry cannot use (crop outside the image);
