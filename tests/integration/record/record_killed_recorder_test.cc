@@ -92,11 +92,13 @@ TEST(KilledRecorder, RecoverKeepsEveryMessageOfTheCompleteChunks) {
     sent_velocities[seq] = Padded(cdr);
     ++seq;
     std::error_code ec;
-    if (!killed && fs::file_size(file, ec) > 10u << 20) {
+    if (fs::file_size(file, ec) > 10u << 20) {
+      // Killed right after a write, with that message still in flight. No more writes: the dead
+      // reader stays matched until its lease expires, so acknowledgments would time out.
       recorder.Signal(SIGKILL);
       killed = true;
+      break;
     }
-    if (killed && recorder.WaitExit(0ms)) break;
   }
   ASSERT_TRUE(killed) << "the recording never grew past 10 MiB";
   ASSERT_EQ(recorder.WaitExit(10s), 128 + SIGKILL);
@@ -126,7 +128,7 @@ TEST(KilledRecorder, RecoverKeepsEveryMessageOfTheCompleteChunks) {
     total += list.size();
   }
   EXPECT_EQ(total, expected);
-  EXPECT_LT(total, 2 * seq) << "the kill should have cut the recording short";
+  EXPECT_LE(total, 2 * seq);
 
   // And info accepts it.
   const CliResult info = RunCli({"info", repaired}, dir / "info.log");
