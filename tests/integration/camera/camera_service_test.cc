@@ -5,6 +5,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 
 #include <chrono>
 #include <memory>
@@ -15,6 +16,7 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
+#include "services/occupancy/camera_model.h"
 #include "tests/integration/camera/image_test_util.h"
 #include "tests/integration/occupancy/service_process.h"
 #include "tests/support/test_domain.h"
@@ -111,6 +113,42 @@ TEST_F(CameraServiceTest, RateZeroInLockstepLosesNothingForAStageThatFallsBehind
   for (int i = 0; i < kFrames; ++i) EXPECT_EQ(seqs[i], static_cast<uint64_t>(i));
 }
 
+TEST_F(CameraServiceTest, LoopContinuesFrameNumbersAndStampsUpwards) {
+  const std::vector<cv::Mat> images = WriteImages(3);
+  bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
+  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "fps=10", "loop=true",
+                                       "rate_hz=50"}));
+  for (int i = 0; i < 8; ++i) {
+    const auto frame = frames.TakeOne(10s);
+    ASSERT_TRUE(frame) << "frame " << i << "\n" << camera.Output();
+    EXPECT_EQ(frame->header.frame_seq, static_cast<uint64_t>(i));
+    EXPECT_EQ(frame->header.stamp_ns, i * 100'000'000LL) << "stamps from the source rate, not rate_hz";
+    EXPECT_EQ(cv::norm(camera::ImageView(*frame), images[i % 3], cv::NORM_INF), 0) << "frame " << i;
+  }
+  EXPECT_TRUE(camera.Running()) << "a looping source does not end";
+}
+
+TEST_F(CameraServiceTest, VideoFileFramesArriveInOrderWithIncreasingStamps) {
+  const std::string video = (images_.path() / "clip.avi").string();
+  {
+    cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, cv::Size(64, 48));
+    if (!writer.isOpened()) GTEST_SKIP() << "OpenCV cannot write MJPG video here";
+    for (int i = 0; i < 5; ++i) writer.write(testing::RandomTexture(64, 48, 3, 50 + i));
+  }
+  bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
+  ServiceProcess camera(kBinary, Args({"source=video", "path=" + video}));
+  int64_t previous_stamp = -1;
+  for (int i = 0; i < 5; ++i) {
+    const auto frame = frames.TakeOne(10s);
+    ASSERT_TRUE(frame) << "frame " << i << "\n" << camera.Output();
+    EXPECT_EQ(frame->header.frame_seq, static_cast<uint64_t>(i));
+    EXPECT_GT(frame->header.stamp_ns, previous_stamp);
+    previous_stamp = frame->header.stamp_ns;
+    EXPECT_EQ(frame->width, 64u);
+  }
+  EXPECT_EQ(camera.WaitExit(10s), 0) << camera.Output();
+}
+
 TEST_F(CameraServiceTest, CropAndGreyAreApplied) {
   const std::vector<cv::Mat> images = WriteImages(2);
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
@@ -123,6 +161,28 @@ TEST_F(CameraServiceTest, CropAndGreyAreApplied) {
   ASSERT_EQ(frame->height, 10u);
   cv::Mat expected;
   cv::cvtColor(images[0](cv::Rect(8, 4, 20, 10)), expected, cv::COLOR_BGR2GRAY);
+  EXPECT_EQ(cv::norm(camera::ImageView(*frame), expected, cv::NORM_INF), 0);
+}
+
+TEST_F(CameraServiceTest, AntiVignettingAndUndistortionMatchTheOccupancyCameraModel) {
+  const std::vector<cv::Mat> images = WriteImages(1);
+  occupancy::CameraConfig model;
+  model.width = 64;
+  model.height = 48;
+  model.fx = model.fy = 50.0;
+  model.cx = 31.5;
+  model.cy = 23.5;
+  model.k1 = -0.2;
+  model.vignetting_gains = {0.3, 0.2, 0.1};
+  bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
+  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "anti_vignetting=true",
+                                       "undistort=true", "model.width=64", "model.height=48", "model.fx=50",
+                                       "model.fy=50", "model.cx=31.5", "model.cy=23.5", "model.k1=-0.2",
+                                       "model.vignetting_gains=[0.3, 0.2, 0.1]"}));
+  const auto frame = frames.TakeOne(10s);
+  ASSERT_TRUE(frame) << camera.Output();
+  const cv::Mat expected = occupancy::CameraModel(model).Correct(images[0]);
+  EXPECT_GT(cv::norm(expected, images[0], cv::NORM_L1), 0) << "the correction changes the image";
   EXPECT_EQ(cv::norm(camera::ImageView(*frame), expected, cv::NORM_INF), 0);
 }
 
