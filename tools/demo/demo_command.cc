@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -57,7 +58,7 @@ void PrepareOutputDir(const fs::path& out) {
     for (const auto& entry : fs::directory_iterator(dir))
       if (entry.is_regular_file() && entry.path().extension() == ext) fs::remove(entry.path());
   for (const char* name : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid.pgm",
-                           "grid.yaml", "recording.mcap"}) {
+                           "grid.yaml", "recording.mcap", "trajectories.csv"}) {
     std::error_code ignored;
     fs::remove(out / name, ignored);
   }
@@ -94,6 +95,41 @@ std::string Metres(std::optional<double> v) {
   std::ostringstream s;
   s << std::fixed << std::setprecision(3) << *v << " m";
   return s.str();
+}
+
+// Per frame: ground truth (world), experience-map pose (map frame), odometry and its dead
+// reckoning, for plotting and for calibrating the odometry against the truth.
+void WriteTrajectoriesCsv(const DemoObservations& seen, const std::vector<FramePose>& dead_reckoning,
+                          const fs::path& path) {
+  struct Row {
+    const FramePose* truth = nullptr;
+    const FramePose* map = nullptr;
+    const FrameVelocity* odometry = nullptr;
+    const FramePose* reckoned = nullptr;
+  };
+  std::map<uint64_t, Row> rows;
+  for (const auto& p : seen.ground_truth) rows[p.frame_seq].truth = &p;
+  for (const auto& p : seen.experience_poses) rows[p.frame_seq].map = &p;
+  for (const auto& v : seen.odometry) rows[v.frame_seq].odometry = &v;
+  for (const auto& p : dead_reckoning) rows[p.frame_seq].reckoned = &p;
+  std::ofstream csv(path);
+  csv << "frame_seq,stamp_ns,truth_x,truth_y,truth_theta,map_x,map_y,map_theta,vtrans_mps,vrot_radps,dt_s,"
+         "odometry_x,odometry_y,odometry_theta\n";
+  csv << std::setprecision(9);
+  auto pose = [&csv](const FramePose* p) {
+    if (p) csv << "," << p->x << "," << p->y << "," << p->theta;
+    else csv << ",,,";
+  };
+  for (const auto& [seq, row] : rows) {
+    const int64_t stamp = row.truth ? row.truth->stamp_ns : (row.map ? row.map->stamp_ns : 0);
+    csv << seq << "," << stamp;
+    pose(row.truth);
+    pose(row.map);
+    if (row.odometry) csv << "," << row.odometry->vtrans_mps << "," << row.odometry->vrot_radps << "," << row.odometry->dt_s;
+    else csv << ",,,";
+    pose(row.reckoned);
+    csv << "\n";
+  }
 }
 
 struct TickContext {
@@ -261,6 +297,7 @@ int RunDemo(const DemoOptions& options) {
   const auto ate_odometry = TrajectoryErrorAgainstTruth(dead_reckoning, seen.ground_truth);
   cv::imwrite((out / "experience_map.png").string(),
               RenderExperienceMap(world, seen.ground_truth, seen.map ? &*seen.map : nullptr, ate ? &*ate : nullptr));
+  WriteTrajectoriesCsv(seen, dead_reckoning, out / "trajectories.csv");
   const uint64_t frames = seen.ground_truth.size();
   const uint32_t experiences = seen.map ? static_cast<uint32_t>(seen.map->experiences.size()) : seen.experience_count;
 
@@ -326,7 +363,7 @@ int RunDemo(const DemoOptions& options) {
          << "The map frame starts at the robot's start pose; the grid is placed in the world by the known start\n"
          << "pose for coverage and precision (no alignment).\n";
   for (const auto& n : notes) report << "note: " << n << "\n";
-  report << "\nfiles: summary.json, report.txt, experience_map.png, occupancy.png, grid.pgm, grid.yaml"
+  report << "\nfiles: summary.json, report.txt, experience_map.png, occupancy.png, grid.pgm, grid.yaml, trajectories.csv"
          << (record ? ", recording.mcap" : "") << ", logs/, state/\n";
   std::ofstream(out / "report.txt") << report.str();
   std::cout << "\n" << report.str();

@@ -85,6 +85,7 @@ SimNode::SimNode(ServiceContext& context, const Config& config)
 SimNode::~SimNode() {
   // Subscriber callbacks use the mutex: end them before anything else goes.
   command_sub_.reset();
+  lockstep_matched_.clear();
   lockstep_subs_.clear();
   {
     std::lock_guard lock(mutex_);
@@ -100,19 +101,25 @@ void SimNode::SubscribeLockstepTopics() {
     const std::string& name = config_.lockstep_topics[i];
     const int stage = static_cast<int>(i);
     auto report = [this, stage](const auto& m) { OnStageReport(stage, m.header.frame_seq); };
+    auto add = [&](auto topic) {
+      using T = typename decltype(topic)::Type;
+      auto sub = context_.Subscribe<T>(topic, report);
+      lockstep_matched_.push_back([sub] { return sub->MatchedPublishers(); });
+      lockstep_subs_.push_back(std::move(sub));
+    };
     namespace t = bus::topics;
     if (name == t::kCameraImage.name) {
-      lockstep_subs_.push_back(context_.Subscribe<msg::Image>(t::kCameraImage, report));
+      add(t::kCameraImage);
     } else if (name == t::kOdometryVelocity.name) {
-      lockstep_subs_.push_back(context_.Subscribe<msg::Velocity>(t::kOdometryVelocity, report));
+      add(t::kOdometryVelocity);
     } else if (name == t::kTemplatesView.name) {
-      lockstep_subs_.push_back(context_.Subscribe<msg::ViewTemplate>(t::kTemplatesView, report));
+      add(t::kTemplatesView);
     } else if (name == t::kPoseCellsAction.name) {
-      lockstep_subs_.push_back(context_.Subscribe<msg::PoseCellAction>(t::kPoseCellsAction, report));
+      add(t::kPoseCellsAction);
     } else if (name == t::kExperienceMapPose.name) {
-      lockstep_subs_.push_back(context_.Subscribe<msg::ExperiencePose>(t::kExperienceMapPose, report));
+      add(t::kExperienceMapPose);
     } else if (name == t::kOccupancyProfile.name) {
-      lockstep_subs_.push_back(context_.Subscribe<msg::ObstacleProfile>(t::kOccupancyProfile, report));
+      add(t::kOccupancyProfile);
     } else {
       throw ConfigError("sim.lockstep_topics", "unknown per-frame topic '" + name + "'");
     }
@@ -233,13 +240,26 @@ void SimNode::PublishFrame(const SimFrame& frame, const msg::Header& header) {
 
 void SimNode::Run() {
   try {
-    // Frames published before the camera service listens are lost: give it time to come up.
-    const auto camera_deadline = Clock::now() + Seconds(config_.wait_for_camera_s);
-    while (camera_pub_->MatchedSubscribers() < 1 && Clock::now() < camera_deadline) {
+    // Frames published before the pipeline listens are lost, and in lockstep a lost frame stalls
+    // the start until the startup timeout: wait for the camera service to read sim/camera and for
+    // the lockstep stages to publish, then give the services between them time to match too.
+    auto pipeline_ready = [this] {
+      if (camera_pub_->MatchedSubscribers() < 1) return false;
+      for (const auto& matched : lockstep_matched_)
+        if (matched() < 1) return false;
+      return true;
+    };
+    const auto pipeline_deadline = Clock::now() + Seconds(config_.wait_for_pipeline_s);
+    while (!pipeline_ready() && Clock::now() < pipeline_deadline) {
       std::unique_lock lock(mutex_);
       if (wake_.wait_for(lock, std::chrono::milliseconds(20), [this] { return stop_; })) return;
     }
-    if (camera_pub_->MatchedSubscribers() < 1) spdlog::warn("no reader of sim/camera yet; publishing anyway");
+    if (!pipeline_ready()) {
+      spdlog::warn("pipeline not (fully) there after {} s; publishing anyway", config_.wait_for_pipeline_s);
+    } else if (config_.wait_for_pipeline_s > 0) {
+      std::unique_lock lock(mutex_);
+      if (wake_.wait_for(lock, Seconds(config_.pipeline_settle_s), [this] { return stop_; })) return;
+    }
     const double dt = config_.sim.motion.time_step_s;
     const auto rate_start = Clock::now();
     SimFrame frame;

@@ -17,6 +17,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -78,6 +79,7 @@ class SimNode {
   std::shared_ptr<bus::Publisher<msg::MotionFeedback>> feedback_pub_;
   std::shared_ptr<void> command_sub_;
   std::vector<std::shared_ptr<void>> lockstep_subs_;
+  std::vector<std::function<int()>> lockstep_matched_;  // matched publishers per lockstep topic
 
   std::mutex mutex_;
   std::condition_variable wake_;

@@ -119,7 +119,7 @@ class SimProcessTest : public ::testing::Test {
   std::vector<std::string> SimArgs() const {
     // A fixed fast rate (no lockstep: no pipeline here); no wait for a camera service.
     return {"--domain", std::to_string(domain_.id()), "--set", "sim.rate_hz=100", "--set",
-            "sim.wait_for_camera_s=0", "--set", "sim.camera.width=160", "--set", "sim.camera.height=120"};
+            "sim.wait_for_pipeline_s=0", "--set", "sim.camera.width=160", "--set", "sim.camera.height=120"};
   }
 
   // Drains the ground-truth topic; returns the newest pose seen (keeps the previous one if none).
