@@ -211,6 +211,42 @@ TEST_F(TemplatesServiceTest, CleanStopAndRestartKeepsTemplates) {
   EXPECT_EQ(view->template_id, 1u);
 }
 
+TEST_F(TemplatesServiceTest, PeriodicSaveMovesTheJournalIntoTheStateFile) {
+  const std::filesystem::path journal = state_.path() / "templates.journal";
+  // A short save period (Start() uses a long one).
+  auto templates = std::make_unique<ServiceProcess>(
+      kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--state-dir",
+                                        state_.path().string(), "--set", "service.heartbeat_period_s=0.1", "--set",
+                                        "service.state_save_period_s=0.2", "--set", "templates.image_crop_x_min=0",
+                                        "--set", "templates.image_crop_x_max=-1", "--set",
+                                        "templates.image_crop_y_min=0", "--set", "templates.image_crop_y_max=-1",
+                                        "--set", "templates.template_x_size=32", "--set",
+                                        "templates.template_y_size=16", "--set", "templates.shift_match=4"});
+  ASSERT_TRUE(testing::WaitUntil([&] { return images_->MatchedSubscribers() >= 1; }, 10s)) << templates->Output();
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(Send(Scene(500 + i), i)) << templates->Output();
+  EXPECT_TRUE(testing::WaitUntil([&] { return std::filesystem::file_size(journal) == 0; }, 5s))
+      << "the periodic save empties the journal\n" << templates->Output();
+  templates->Signal(SIGKILL);
+  templates->WaitExit(5s);
+  auto restarted = Start();
+  const auto view = Send(Scene(502), 10);
+  ASSERT_TRUE(view) << restarted->Output();
+  EXPECT_FALSE(view->is_new);
+  EXPECT_EQ(view->template_id, 2u);
+  EXPECT_EQ(view->template_count, 3u);
+}
+
+TEST_F(TemplatesServiceTest, CorruptJournalBeforeItsLastRecordRefusesTheStart) {
+  {
+    std::ofstream out(state_.path() / "templates.journal", std::ios::binary);
+    out << std::string(16, 'x') << std::string(200, 'y');  // not a record, and more data after it
+  }
+  const auto [code, output] = testing::RunToExit(
+      kBinary, {"--domain", std::to_string(domain_.id()), "--state-dir", state_.path().string()});
+  EXPECT_EQ(code, 1) << output;
+  EXPECT_NE(output.find("templates.journal"), std::string::npos) << output;
+}
+
 TEST_F(TemplatesServiceTest, CorruptStateFileRefusesTheStart) {
   {
     std::ofstream out(state_.path() / "templates.pb", std::ios::binary);
