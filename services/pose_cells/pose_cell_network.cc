@@ -686,7 +686,7 @@ Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_r
 
 void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& experiences,
                                          const std::vector<std::pair<uint32_t, uint32_t>>& links,
-                                         uint32_t current_experience_id) {
+                                         uint32_t current_experience_id, bool move_packet) {
   auto fail = [](const std::string& why) { throw std::invalid_argument("pose cells: adopted map: " + why); };
   const uint32_t n = static_cast<uint32_t>(experiences.size());
   uint32_t template_end = static_cast<uint32_t>(views_.size());
@@ -736,15 +736,30 @@ void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& exper
   has_current_template_ = has_previous_template_ = true;
   view_delta_th_cells_ = 0.0;
   // The packet restarts where the robot last was, as the constructor starts it in the centre.
+  if (move_packet) PlacePacket({cur.pc_x, cur.pc_y, cur.pc_th});
+}
+
+void PoseCellNetwork::PlacePacket(const PoseCellPosition& cell) {
   for (int t : ts_.index) {
     for (int y : ys_.index) rows_act_[Row(y, t)] = RowExtent{};
   }
   ZeroRegion(activity_, xs_, ys_, ts_);
   for (AxisSet* a : {&xs_, &ys_}) a->Reset(dim_xy_);
   ts_.Reset(dim_th_);
-  InjectEnergy(static_cast<int>(std::lround(cur.pc_x)), static_cast<int>(std::lround(cur.pc_y)),
-               static_cast<int>(std::lround(cur.pc_th)), 1.0);
-  best_ = {cur.pc_x, cur.pc_y, cur.pc_th};
+  const int x = Wrap(static_cast<int>(std::lround(cell.x)), dim_xy_);
+  const int y = Wrap(static_cast<int>(std::lround(cell.y)), dim_xy_);
+  const int th = Wrap(static_cast<int>(std::lround(cell.th)), dim_th_);
+  InjectEnergy(x, y, th, 1.0);
+  best_ = {static_cast<double>(x), static_cast<double>(y), static_cast<double>(th)};
+}
+
+bool PoseCellNetwork::RelocaliseToView(uint32_t template_id, double relative_angle_rad) {
+  if (!std::isfinite(relative_angle_rad) || template_id >= views_.size()) return false;
+  const ViewAssociation& view = views_[template_id];
+  if (!view.placed || view.experience_ids.empty()) return false;
+  const double gamma_cells = relative_angle_rad / kTwoPi * dim_th_;
+  PlacePacket({view.pc_x, view.pc_y, WrapReal(view.pc_th + gamma_cells, dim_th_)});
+  return true;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -73,9 +73,16 @@ class PoseCellNetwork {
   // with the cell of their first experience (their learning cell, 001 eq. 3 without offset),
   // or recorded unplaced (SkipTemplates) when they have none; the activity packet is moved to the current experience's cell, where the robot last was.
   // Throws std::invalid_argument (network unchanged) on out-of-range cells or ids.
+  // move_packet = false keeps the activity packet (a restored state knows a more recent pose).
   void AdoptExperienceMap(const std::vector<MapExperience>& experiences,
                           const std::vector<std::pair<uint32_t, uint32_t>>& links,
-                          uint32_t current_experience_id);
+                          uint32_t current_experience_id, bool move_packet = true);
+
+  // After a restart that lost frames the robot moved an unknown amount: a familiar view tells
+  // where it is. Moves the activity packet to the cell the template is associated with,
+  // shifted by the view's orientation offset (001 eq. 4), and returns true; returns false with
+  // nothing changed when the template is unknown, unplaced or has no experience yet.
+  bool RelocaliseToView(uint32_t template_id, double relative_angle_rad);
 
   // Templates [template_count(), next_template_id) were learnt while this network did not see
   // their views (it was down, or their frames were lost). They are recorded unplaced: the first
@@ -193,6 +200,8 @@ class PoseCellNetwork {
                   const AxisSet& ys, const AxisSet& ts_in, const AxisSet& ts_out) const;
   size_t Row(int y, int th) const { return static_cast<size_t>(th) * dim_xy_ + y; }
   bool Linked(uint32_t a, uint32_t b) const;
+  // All activity at one cell (as the constructor starts), best pose there.
+  void PlacePacket(const PoseCellPosition& cell);
   void CreateExperience();
   void ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id,
                      double relative_angle_rad) const;

@@ -69,6 +69,7 @@ class PoseCellsNode::Processor {
     std::optional<msg::ExperienceMap> snapshot = AwaitMapSnapshot();
     std::lock_guard lock(mutex_);
     if (snapshot) AdoptSnapshot(*snapshot);
+    if (restarted_) relocalise_frames_left_ = config_.restart_relocalise_frames;
     resynced_ = true;
     ProcessReady();
   }
@@ -189,6 +190,8 @@ class PoseCellsNode::Processor {
         view = nullptr;
       }
     }
+    if (bridge_pending_) BridgeMissedFrames(frame.frame_seq, header.stamp_ns, dt);
+    if (relocalise_frames_left_ > 0) Relocalise(frame.frame_seq, view);
     Action action;
     try {
       action = view ? network_.ProcessFrame(vtrans, vrot, dt, view->template_id, view->is_new, view->relative_angle_rad)
@@ -211,12 +214,41 @@ class PoseCellsNode::Processor {
     out.vrot_radps = vrot;
     out.dt_s = dt;
     SetRelativeAngle(out, action.relative_angle_rad);
+    if (frame.velocity) mean_vtrans_mps_ += 0.1 * (vtrans - mean_vtrans_mps_);
     has_last_frame_ = true;
     last_frame_seq_ = header.frame_seq;
     last_stamp_ns_ = header.stamp_ns;
     dirty_ = true;
     context_.SetLastFrame(header.frame_seq, header.stamp_ns);
     action_pub_->Publish(out);
+  }
+
+  // After a restart from the saved state: the robot kept moving through the frames this service
+  // never saw. Their odometry is gone; the recent forward speed over the time they took is the
+  // best guess (rotation is not extrapolated: turns are short and would mislead more).
+  void BridgeMissedFrames(uint64_t frame_seq, int64_t stamp_ns, double frame_dt_s) {
+    bridge_pending_ = false;
+    if (!has_last_frame_ || frame_seq <= last_frame_seq_ + 1 || stamp_ns <= last_stamp_ns_) return;
+    const double gap_s = static_cast<double>(stamp_ns - last_stamp_ns_) * 1e-9 - frame_dt_s;
+    if (!(gap_s > 0)) return;
+    network_.PathIntegrate(mean_vtrans_mps_, 0.0, std::min(gap_s, config_.max_dt_s));
+    network_.UpdateBestPose();
+    spdlog::info("bridged {} missed frames ({:.2f} s) at {:.2f} m/s", frame_seq - last_frame_seq_ - 1, gap_s,
+                 mean_vtrans_mps_);
+  }
+
+  // After a restart: the frames this service never saw moved the robot; the first familiar view
+  // says where it is now.
+  void Relocalise(uint64_t frame_seq, const msg::ViewTemplate* view) {
+    if (has_last_frame_ && frame_seq == last_frame_seq_ + 1) {
+      relocalise_frames_left_ = 0;  // nothing was missed
+      return;
+    }
+    --relocalise_frames_left_;
+    if (view && network_.RelocaliseToView(view->template_id, view->relative_angle_rad)) {
+      relocalise_frames_left_ = 0;
+      spdlog::info("relocalised the pose cells by the view of template {} at frame {}", view->template_id, frame_seq);
+    }
   }
 
   // ------------------------------------------------------------------------------------------
@@ -268,7 +300,8 @@ class PoseCellsNode::Processor {
       return;
     }
     try {
-      network_.AdoptExperienceMap(experiences, links, map.current_experience_id);
+      // A restored state's packet is more recent than the current experience's cell.
+      network_.AdoptExperienceMap(experiences, links, map.current_experience_id, /*move_packet=*/!state_loaded_);
     } catch (const std::invalid_argument& e) {
       context_.Reject("map", std::string("snapshot not adopted: ") + e.what());
       return;
@@ -278,6 +311,7 @@ class PoseCellsNode::Processor {
         "(saved {}); continuing at action {}",
         map.action_seq, next_action_seq_, map.experiences.size(), experience_count_at_load_, map.action_seq + 1);
     next_action_seq_ = map.action_seq + 1;
+    restarted_ = true;
     dirty_ = true;
   }
 
@@ -295,6 +329,10 @@ class PoseCellsNode::Processor {
     last_frame_seq_ = state.last_frame_seq();
     last_stamp_ns_ = state.last_stamp_ns();
     experience_count_at_load_ = network_.experience_count();
+    mean_vtrans_mps_ = state.mean_vtrans_mps();
+    restarted_ = true;
+    state_loaded_ = true;
+    bridge_pending_ = true;
     spdlog::info("loaded {}: {} experiences, {} templates, next action {}", path, network_.experience_count(),
                  network_.template_count(), next_action_seq_);
   }
@@ -311,6 +349,7 @@ class PoseCellsNode::Processor {
       state.set_has_last_frame(has_last_frame_);
       state.set_last_frame_seq(last_frame_seq_);
       state.set_last_stamp_ns(last_stamp_ns_);
+      state.set_mean_vtrans_mps(mean_vtrans_mps_);
       dirty_ = false;
     }
     try {
@@ -335,6 +374,11 @@ class PoseCellsNode::Processor {
   uint64_t last_frame_seq_ = 0;
   int64_t last_stamp_ns_ = 0;
   uint32_t experience_count_at_load_ = 0;
+  bool restarted_ = false;             // state loaded or adopted: frames may have been missed
+  bool state_loaded_ = false;
+  bool bridge_pending_ = false;
+  double mean_vtrans_mps_ = 0.0;
+  int relocalise_frames_left_ = 0;
   bool dirty_ = true;  // a fresh start saves too, so a restart sees the file
   std::chrono::steady_clock::time_point last_save_;
 };

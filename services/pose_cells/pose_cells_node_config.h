@@ -23,6 +23,9 @@ struct PoseCellsNodeConfig {
   // After a snapshot, keep listening this long for a newer one (the map publishes its catch-up
   // snapshot once its input goes quiet).
   double resync_settle_s = 0.6;
+  // After a restart that lost frames, the first familiar view within this many frames moves the
+  // activity packet to its place (the robot moved while the service was down); 0 = never.
+  int restart_relocalise_frames = 100;
   // Inputs beyond these are refused as malformed.
   double max_dt_s = 60.0;
   double max_vtrans_mps = 500.0;
@@ -38,6 +41,8 @@ struct PoseCellsNodeConfig {
     v("resync_timeout_s", resync_timeout_s,
       "seconds to wait at start for the experience map snapshot (resynchronisation); 0 = no wait");
     v("resync_settle_s", resync_settle_s, "seconds to keep listening for a newer snapshot after one arrived");
+    v("restart_relocalise_frames", restart_relocalise_frames,
+      "after a restart that lost frames, the first familiar view within this many frames relocalises the packet");
     v("max_dt_s", max_dt_s, "largest accepted frame interval (s); larger odometry is refused");
     v("max_vtrans_mps", max_vtrans_mps, "largest accepted |forward speed| (m/s)");
     v("max_vrot_radps", max_vrot_radps, "largest accepted |rotation rate| (rad/s)");
@@ -52,6 +57,7 @@ struct PoseCellsNodeConfig {
             "must be in [0, 600]");
     Require(std::isfinite(resync_settle_s) && resync_settle_s >= 0 && resync_settle_s <= 60, "resync_settle_s",
             "must be in [0, 60]");
+    Require(restart_relocalise_frames >= 0, "restart_relocalise_frames", "must be >= 0");
     Require(std::isfinite(max_dt_s) && max_dt_s > 0, "max_dt_s", "must be positive");
     Require(std::isfinite(max_vtrans_mps) && max_vtrans_mps > 0, "max_vtrans_mps", "must be positive");
     Require(std::isfinite(max_vrot_radps) && max_vrot_radps > 0, "max_vrot_radps", "must be positive");
