@@ -244,10 +244,20 @@ class CameraNode::Impl {
   void Publish(const cv::Mat& image, uint64_t seq, int64_t stamp_ns) {
     message_.header = {context_.robot_id(), seq, stamp_ns};
     FillImageMessage(image, message_);
-    publisher_->Publish(message_);
+    PublishMessage(message_);
     context_.SetLastFrame(seq, stamp_ns);
     last_seq_ = seq;
     last_stamp_ns_ = stamp_ns;
+  }
+
+  // A reliable reader blocked beyond the sensor preset's limit makes Publish throw: that reader
+  // misses this frame (counted, logged once); the camera goes on.
+  void PublishMessage(const msg::Image& image) {
+    try {
+      publisher_->Publish(image);
+    } catch (const bus::BusError& e) {
+      context_.Reject("frame_not_delivered", e.what());
+    }
   }
 
   void OnSimFrame(const msg::Image& frame) {
@@ -257,7 +267,7 @@ class CameraNode::Impl {
     if (preparation_.identity()) {
       msg::Image out = frame;
       out.header.robot_id = context_.robot_id();
-      publisher_->Publish(out);
+      PublishMessage(out);
       context_.SetLastFrame(out.header.frame_seq, out.header.stamp_ns);
       return;
     }

@@ -44,8 +44,18 @@ class OdometryNode::Impl {
     if (!std::isfinite(v.vtrans_mps) || !std::isfinite(v.vrot_radps) || !std::isfinite(v.dt_s))
       return context_.Reject("non_finite_wheel_odometry", "wheel odometry with a non-finite number");
     if (v.dt_s < 0) return context_.Reject("negative_dt", "wheel odometry with dt " + std::to_string(v.dt_s));
-    publisher_->Publish(v);
+    Publish(v);
     context_.SetLastFrame(v.header.frame_seq, v.header.stamp_ns);
+  }
+
+  // A reliable reader blocked beyond the preset's limit makes Publish throw: that reader misses
+  // this velocity (counted, logged once); the service goes on.
+  void Publish(const msg::Velocity& v) {
+    try {
+      publisher_->Publish(v);
+    } catch (const bus::BusError& e) {
+      context_.Reject("velocity_not_delivered", e.what());
+    }
   }
 
   void OnImage(const msg::Image& image) {
@@ -97,7 +107,7 @@ class OdometryNode::Impl {
     out.vrot_radps = velocity.vrot;
     out.dt_s = dt_s;
     out.source = msg::VelocitySource::VELOCITY_VISUAL;
-    publisher_->Publish(out);
+    Publish(out);
     context_.SetLastFrame(image.header.frame_seq, image.header.stamp_ns);
   }
 

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <filesystem>
 #include <mutex>
@@ -146,7 +147,15 @@ class TemplatesNode::Impl {
     }
     if (match.is_new && journal_) {
       // Durable before anyone hears of the id: a restart must never give it to another view.
-      journal_->Append(library_.TemplateToProto(match.template_id));
+      try {
+        journal_->Append(library_.TemplateToProto(match.template_id));
+      } catch (const std::exception& e) {
+        // The library now holds a template the disk does not: going on would publish an id a
+        // restart could give to another view. Stop; a supervisor restarts from the saved state.
+        spdlog::critical("{}; exiting without publishing template {}", e.what(), match.template_id);
+        spdlog::default_logger()->flush();
+        std::_Exit(1);
+      }
       ++learnt_since_save_;
     }
     msg::ViewTemplate out;
@@ -156,7 +165,13 @@ class TemplatesNode::Impl {
     out.relative_angle_rad = std::isfinite(match.relative_angle_rad) ? match.relative_angle_rad : 0.0;
     out.difference = std::isfinite(match.difference) ? match.difference : kNoTemplateDifference;
     out.template_count = static_cast<uint32_t>(library_.size());
-    publisher_->Publish(out);
+    try {
+      publisher_->Publish(out);
+    } catch (const bus::BusError& e) {
+      // A reliable reader blocked beyond the preset's limit misses this view; the template is
+      // kept (journaled) and the service goes on.
+      context_.Reject("view_not_delivered", e.what());
+    }
     context_.SetLastFrame(image.header.frame_seq, image.header.stamp_ns);
   }
 
