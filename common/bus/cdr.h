@@ -66,6 +66,15 @@ class CdrWriter {
   }
   void Reserve(std::size_t bytes) { out_.reserve(out_.size() + bytes); }
 
+  // Pads the message to a multiple of 4 bytes and records the padding in the last two bits of
+  // the encapsulation options (XTypes 7.6.3.1.2), so the bytes a writer sends, a reader takes
+  // and a recorder stores are the same.
+  void Finish() {
+    const std::size_t pad = (4 - (out_.size() - base_) % 4) % 4;
+    out_.insert(out_.end(), pad, 0);
+    out_[base_ - 1] = static_cast<uint8_t>(pad);
+  }
+
  private:
   void Align(std::size_t n) {
     const std::size_t pos = out_.size() - base_;

@@ -1,5 +1,8 @@
 #include "common/bus/qos.h"
 
+#include <stdexcept>
+#include <string>
+
 namespace rslam::bus {
 
 QosSettings SettingsOf(QosPreset preset) {
@@ -24,6 +27,15 @@ std::string_view PresetName(QosPreset preset) {
     case QosPreset::kState: return "state";
   }
   return "?";
+}
+
+QosPreset ParseQosPreset(std::string_view name) {
+  std::string known;
+  for (QosPreset preset : kAllQosPresets) {
+    if (PresetName(preset) == name) return preset;
+    known += (known.empty() ? "" : ", ") + std::string(PresetName(preset));
+  }
+  throw std::invalid_argument("unknown QoS preset '" + std::string(name) + "' (" + known + ")");
 }
 
 }  // namespace rslam::bus

@@ -31,7 +31,12 @@ struct QosSettings {
   int32_t max_blocking_ms;  // how long a reliable writer may block on a full reader
 };
 
+inline constexpr QosPreset kAllQosPresets[] = {QosPreset::kSensor, QosPreset::kStream, QosPreset::kLog,
+                                               QosPreset::kState};
+
 QosSettings SettingsOf(QosPreset preset);
 std::string_view PresetName(QosPreset preset);
+// The preset named by PresetName; throws std::invalid_argument naming the known ones.
+QosPreset ParseQosPreset(std::string_view name);
 
 }  // namespace rslam::bus

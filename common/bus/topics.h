@@ -16,6 +16,13 @@ struct Topic {
   QosPreset qos;
 };
 
+// A topic without its C++ type, for tools that handle every topic alike (the recorder).
+struct TopicInfo {
+  std::string_view name;
+  std::string_view type_name;
+  QosPreset qos;
+};
+
 namespace topics {
 inline constexpr Topic<msg::Image> kCameraImage{"camera/image", QosPreset::kSensor};
 inline constexpr Topic<msg::Velocity> kOdometryVelocity{"odometry/velocity", QosPreset::kStream};
@@ -33,6 +40,18 @@ inline constexpr Topic<msg::GroundTruthPose> kGroundTruth{"sim/ground_truth", Qo
 // The simulator's camera, read by the camera service as its source (like a device).
 inline constexpr Topic<msg::Image> kSimCamera{"sim/camera", QosPreset::kSensor};
 inline constexpr Topic<msg::ServiceStatus> kStatus{"rslam/status", QosPreset::kState};
+
+// Every topic above, for iteration.
+template <class T>
+constexpr TopicInfo Info(const Topic<T>& t) {
+  return {t.name, MessageTraits<T>::kTypeName, t.qos};
+}
+inline constexpr TopicInfo kAll[] = {
+    Info(kCameraImage),      Info(kOdometryVelocity), Info(kWheelOdometry),     Info(kTemplatesView),
+    Info(kPoseCellsAction),  Info(kExperienceMapPose), Info(kExperienceMapMap), Info(kOccupancyProfile),
+    Info(kOccupancyGrid),    Info(kExplorerCommand),  Info(kExplorerStatus),    Info(kMotionFeedback),
+    Info(kGroundTruth),      Info(kSimCamera),        Info(kStatus),
+};
 }  // namespace topics
 
 }  // namespace rslam::bus

@@ -14,6 +14,7 @@ template <Message T>
 void AppendCdr(const T& msg, std::vector<uint8_t>& out) {
   CdrWriter writer(out);
   Serialize(writer, msg);
+  writer.Finish();
 }
 
 template <Message T>

@@ -70,24 +70,39 @@ class ServiceContext {
   std::shared_ptr<bus::Publisher<T>> Advertise(const bus::Topic<T>& topic) {
     auto pub = std::make_shared<bus::Publisher<T>>(*participant_, topic);
     std::lock_guard lock(mutex_);
-    out_counters_.push_back([pub] { return pub->published(); });
+    out_counters_.push_back([weak = std::weak_ptr(pub)] {
+      auto p = weak.lock();
+      return p ? p->published() : 0;
+    });
     return pub;
   }
 
   // A subscriber whose callback is timed and whose messages are counted as "in" (and
-  // malformed ones as "rejected").
+  // malformed ones as "rejected"). An exception escaping the callback is counted as a rejected
+  // input and logged once per kind; the service keeps running. The caller owns the subscriber:
+  // destroying it stops its callbacks (the context keeps no reference).
   template <bus::Message T>
   std::shared_ptr<bus::Subscriber<T>> Subscribe(const bus::Topic<T>& topic, std::function<void(const T&)> callback,
                                                 std::string partition = {}) {
-    auto timed = [this, callback = std::move(callback)](const T& msg) {
+    auto timed = [this, callback = std::move(callback), name = std::string(topic.name)](const T& msg) {
       const auto start = std::chrono::steady_clock::now();
-      callback(msg);
+      try {
+        callback(msg);
+      } catch (const std::exception& e) {
+        Reject(name + " (exception)", e.what());
+      }
       stats_.RecordProcessing(std::chrono::steady_clock::now() - start);
     };
     auto sub = std::make_shared<bus::Subscriber<T>>(*participant_, topic, std::move(timed), std::move(partition));
     std::lock_guard lock(mutex_);
-    in_counters_.push_back([sub] { return sub->received(); });
-    rejected_counters_.push_back([sub] { return sub->rejected(); });
+    in_counters_.push_back([weak = std::weak_ptr(sub)] {
+      auto s = weak.lock();
+      return s ? s->received() : 0;
+    });
+    rejected_counters_.push_back([weak = std::weak_ptr(sub)] {
+      auto s = weak.lock();
+      return s ? s->rejected() : 0;
+    });
     return sub;
   }
 

@@ -156,7 +156,7 @@ PlayReport PlayFiles(bus::Participant& participant, const std::vector<std::strin
         why = "metadata lacks dds_topic, robot or qos";
       } else {
         try {
-          qos = ParsePresetName(*qos_name);
+          qos = bus::ParseQosPreset(*qos_name);
         } catch (const std::invalid_argument& e) {
           why = e.what();
         }

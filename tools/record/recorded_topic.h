@@ -20,8 +20,5 @@ struct RecordedTopic {
 // Every topic of the topic table, in table order.
 const std::vector<RecordedTopic>& TopicTable();
 
-// The preset named by bus::PresetName ("sensor", "stream", "log", "state"); throws
-// std::invalid_argument for any other name.
-bus::QosPreset ParsePresetName(std::string_view name);
 
 }  // namespace rslam::record

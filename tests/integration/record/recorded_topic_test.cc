@@ -23,8 +23,8 @@ TEST(RecordedTopicTable, EveryMessageTypeHasATopicAndNamesAreUnique) {
 }
 
 TEST(RecordedTopicTable, PresetNamesParseBack) {
-  for (const auto& t : TopicTable()) EXPECT_EQ(ParsePresetName(bus::PresetName(t.qos)), t.qos) << t.name;
-  EXPECT_THROW(ParsePresetName("fast"), std::invalid_argument);
+  for (const auto& t : TopicTable()) EXPECT_EQ(bus::ParseQosPreset(bus::PresetName(t.qos)), t.qos) << t.name;
+  EXPECT_THROW(bus::ParseQosPreset("fast"), std::invalid_argument);
 }
 
 }  // namespace

@@ -31,6 +31,22 @@ TEST(CdrTest, VelocityEncodesAsXcdr1LittleEndianWithAlignment) {
   EXPECT_EQ(FromCdr<msg::Velocity>(cdr), v);
 }
 
+TEST(CdrTest, MessagesArePaddedToFourBytesAndSaySo) {
+  msg::Header h{"abc", 1, 2};  // 4 + 4 + 4 + 8 + 8 = 28 bytes with the header: no padding
+  msg::ViewTemplate v;
+  v.header.robot_id = "ab";  // ... + uint32 template_count at the end: 4 + 4+3+1 + 8+8 + 4+1+3 + 8+8 + 4 = 56
+  const auto cdr = ToCdr(v);
+  EXPECT_EQ(cdr.size() % 4, 0u);
+  msg::Image image;
+  image.encoding = "m";
+  image.data = {1, 2, 3, 4, 5};  // ends 5 bytes after an aligned count: 3 bytes of padding
+  const auto img = ToCdr(image);
+  EXPECT_EQ(img.size() % 4, 0u);
+  EXPECT_EQ(img[3], 3);
+  EXPECT_EQ(FromCdr<msg::Image>(img), image);
+  (void)h;
+}
+
 TEST(CdrTest, KeyIsTheBigEndianRobotId) {
   msg::ServiceStatus s;
   s.header.robot_id = "r1";
@@ -57,13 +73,14 @@ TEST(CdrTest, TruncatedOrCorruptMessagesAreRefused) {
   msg::Image image;
   FillExample(image, 1);
   std::vector<uint8_t> cdr = ToCdr(image);
-  for (std::size_t cut : {std::size_t{0}, std::size_t{3}, std::size_t{10}, cdr.size() - 1}) {
+  const std::size_t padding = cdr[3] & 3;
+  for (std::size_t cut : {std::size_t{0}, std::size_t{3}, std::size_t{10}, cdr.size() - padding - 1}) {
     std::vector<uint8_t> part(cdr.begin(), cdr.begin() + static_cast<long>(cut));
     EXPECT_THROW(FromCdr<msg::Image>(part), CdrError) << "cut at " << cut;
   }
   // A sequence count far beyond the buffer must not allocate.
   std::vector<uint8_t> huge = cdr;
-  const std::size_t count_at = huge.size() - image.data.size() - 4;
+  const std::size_t count_at = huge.size() - padding - image.data.size() - 4;
   huge[count_at + 3] = 0x7F;
   EXPECT_THROW(FromCdr<msg::Image>(huge), CdrError);
   // An unknown enum value is refused.
