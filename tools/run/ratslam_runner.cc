@@ -23,26 +23,27 @@ double MicrosSince(Clock::time_point start) {
 
 }  // namespace
 
-cv::Mat ToGrey(const cv::Mat& image) {
+cv::Mat ToGrey(const cv::Mat& image, cv::Mat& buffer) {
   if (image.empty()) throw std::invalid_argument("empty image");
   if (image.depth() != CV_8U) throw std::invalid_argument("image is not 8 bits per channel");
   switch (image.channels()) {
     case 1:
       return image;
-    case 3: {
-      cv::Mat grey;
-      cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
-      return grey;
-    }
-    case 4: {
-      cv::Mat grey;
-      cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY);
-      return grey;
-    }
+    case 3:
+      cv::cvtColor(image, buffer, cv::COLOR_BGR2GRAY);
+      return buffer;
+    case 4:
+      cv::cvtColor(image, buffer, cv::COLOR_BGRA2GRAY);
+      return buffer;
     default:
       throw std::invalid_argument("image has " + std::to_string(image.channels()) +
                                   " channels (expected 1, 3 or 4)");
   }
+}
+
+cv::Mat ToGrey(const cv::Mat& image) {
+  cv::Mat buffer;
+  return ToGrey(image, buffer);
 }
 
 RatSlamRunner::RatSlamRunner(const RatSlamConfig& config)
@@ -63,7 +64,7 @@ FrameRecord RatSlamRunner::ProcessFrame(const cv::Mat& image, int64_t stamp_ns) 
 
   // Odometry service.
   auto start = Clock::now();
-  const cv::Mat grey = ToGrey(image);
+  const cv::Mat grey = ToGrey(image, grey_buffer_);
   bool restart = !has_previous_stamp_;
   if (!restart) {
     record.dt_s = static_cast<double>(stamp_ns - previous_stamp_ns_) * 1e-9;

@@ -68,6 +68,9 @@ struct RelaxResult {
 // The frame as CV_8UC1: BGR (3 channels) and BGRA (4) converted, grey returned as is (no copy).
 // Throws std::invalid_argument for an empty image, a depth other than 8 bits, or 2 channels.
 cv::Mat ToGrey(const cv::Mat& image);
+// The same, converting into buffer (reused from frame to frame when the size stays: no
+// allocation per frame); a grey image is returned as is and buffer is left alone.
+cv::Mat ToGrey(const cv::Mat& image, cv::Mat& buffer);
 
 class RatSlamRunner {
  public:
@@ -124,6 +127,7 @@ class RatSlamRunner {
   templates::TemplateLibrary templates_;
   pose_cells::PoseCellNetwork pose_cells_;
   experience_map::ExperienceMap map_;
+  cv::Mat grey_buffer_;  // only ever written by the colour conversion
   uint64_t frames_ = 0;
   bool has_previous_stamp_ = false;  // odometry service
   int64_t previous_stamp_ns_ = 0;
