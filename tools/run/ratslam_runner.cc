@@ -69,6 +69,7 @@ FrameRecord RatSlamRunner::ProcessFrame(const cv::Mat& image, int64_t stamp_ns) 
   if (!restart) {
     record.dt_s = static_cast<double>(stamp_ns - previous_stamp_ns_) * 1e-9;
     restart = grey.size() != previous_size_ || record.dt_s > config_.odometry.max_frame_gap_s;
+    if (restart) ++odometry_restarts_;
   }
   if (restart) {
     odometry_.Reset();

@@ -112,6 +112,9 @@ class RatSlamRunner {
   // Frames whose odometry the pose-cell stage refused, and actions the experience map refused
   // (as the services count them); both 0 on a healthy run.
   uint64_t refused_velocities() const { return refused_velocities_; }
+  // Frames after the first on which the odometry restarted (gap beyond
+  // odometry.max_frame_gap_s, or a new image size): each loses that frame's motion.
+  uint64_t odometry_restarts() const { return odometry_restarts_; }
   uint64_t refused_actions() const { return refused_actions_; }
   // (from, to) of every link a loop closure created.
   const std::set<std::pair<uint32_t, uint32_t>>& loop_closure_links() const { return loop_closure_links_; }
@@ -136,6 +139,7 @@ class RatSlamRunner {
   int64_t last_frame_stamp_ns_ = 0;
   uint64_t next_action_seq_ = 0;
   uint64_t refused_velocities_ = 0;
+  uint64_t odometry_restarts_ = 0;
   uint64_t refused_actions_ = 0;
   uint64_t loop_closures_ = 0;
   int64_t synthetic_stamp_ns_ = 0;  // IntegrateMeasurements' frames

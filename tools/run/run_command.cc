@@ -131,7 +131,13 @@ int Run(const RunOptions& options, std::ostream& out, std::ostream& err) {
                   static_cast<unsigned long long>(statistics.frames()), runner.templates().size(),
                   runner.experience_map().experiences().size(), runner.experience_map().links().size(),
                   static_cast<unsigned long long>(runner.loop_closures()), statistics.CoreFramesPerSecond());
-    out << line << "\nwrote " << options.out_dir << "/{summary.json,experiences.csv,templates.csv,"
+    out << line << "\n";
+    if (runner.odometry_restarts() > 0) {
+      out << "note: the odometry restarted on " << runner.odometry_restarts()
+          << " frames (frame gap beyond odometry.max_frame_gap_s = " << config.odometry.max_frame_gap_s
+          << " s, or an image size change); those frames carry no motion, as in the services\n";
+    }
+    out << "wrote " << options.out_dir << "/{summary.json,experiences.csv,templates.csv,"
         << "experience_map.png,templates.png}\n";
   }
   return 0;

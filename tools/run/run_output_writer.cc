@@ -52,6 +52,10 @@ nlohmann::json MakeSummary(const RatSlamRunner& runner, const RunStatistics& sta
   summary["links"] = map.links().size();
   summary["loop_closures"] = runner.loop_closures();
   summary["fps_core"] = statistics.CoreFramesPerSecond();
+  // Frames whose motion was lost the way the services lose it (see RatSlamRunner).
+  summary["odometry_restarts"] = runner.odometry_restarts();
+  summary["refused_velocities"] = runner.refused_velocities();
+  summary["refused_actions"] = runner.refused_actions();
   summary["ms_per_frame"] = StageJson(statistics.MeanMilliseconds());
   summary["preset"] = description.preset;
   summary["config_file"] = description.config_file;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -155,6 +156,37 @@ TEST(RunCommand, MaxFramesStopsEarly) {
   std::stringstream ignored;
   ASSERT_EQ(RunRatSlamCommand(options, ignored, ignored), 0) << ignored.str();
   EXPECT_EQ(nlohmann::json::parse(ReadFile(dir.path() / "out" / "summary.json"))["frames"], 7);
+}
+
+TEST(RunCommand, ReadsAVideoWithItsOwnStamps) {
+  TempDir dir;
+  const fs::path video = dir.path() / "loop.avi";
+  {
+    cv::VideoWriter writer(video.string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10, cv::Size(640, 480));
+    if (!writer.isOpened()) GTEST_SKIP() << "no video writer in this OpenCV build";
+    const SyntheticLoop loop(36);
+    for (int i = 0; i < 20; ++i) writer.write(loop.Frame(i));
+  }
+  std::ofstream(dir.path() / "loop.yaml") << SyntheticLoop::ConfigYaml();
+  RunOptions options;
+  options.video = video.string();
+  options.config_file = (dir.path() / "loop.yaml").string();
+  options.out_dir = (dir.path() / "out").string();
+  options.progress = RunOptions::Progress::kQuiet;
+  std::stringstream out, err;
+  ASSERT_EQ(RunRatSlamCommand(options, out, err), 0) << err.str();
+  const nlohmann::json summary = nlohmann::json::parse(ReadFile(dir.path() / "out" / "summary.json"));
+  EXPECT_EQ(summary["frames"], 20);
+  EXPECT_GE(summary["templates"].get<int>(), 15) << "JPEG noise does not merge different places";
+  const auto templates = Lines(dir.path() / "out" / "templates.csv");
+  ASSERT_EQ(templates.size(), 21u);
+  EXPECT_EQ(templates[3].substr(0, templates[3].find(',', 2)), "2,200000000") << "the file's 10 Hz stamps";
+
+  std::ofstream(dir.path() / "garbage.avi") << "not a video at all";
+  options.video = (dir.path() / "garbage.avi").string();
+  std::stringstream err2;
+  EXPECT_EQ(RunRatSlamCommand(options, out, err2), 1);
+  EXPECT_NE(err2.str().find("garbage.avi"), std::string::npos) << err2.str();
 }
 
 TEST(RunCommandCli, RunsAndReportsTheResult) {
