@@ -8,6 +8,7 @@
 #include <opencv2/videoio.hpp>
 
 #include <chrono>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <thread>
@@ -111,6 +112,27 @@ TEST_F(CameraServiceTest, RateZeroInLockstepLosesNothingForAStageThatFallsBehind
   }
   ASSERT_EQ(seqs.size(), static_cast<std::size_t>(kFrames)) << camera.Output();
   for (int i = 0; i < kFrames; ++i) EXPECT_EQ(seqs[i], static_cast<uint64_t>(i));
+}
+
+TEST_F(CameraServiceTest, UnreadableImageIsSkippedAndCountedAndItsNumberStaysUnused) {
+  WriteImages(4);
+  {
+    std::ofstream broken(images_.path() / "frame_002.png", std::ios::trunc);
+    broken << "not a png";
+  }
+  bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
+  bus::Subscriber<msg::ServiceStatus> heartbeats(*participant_, bus::topics::kStatus);
+  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "fps=10"}));
+  for (const uint64_t expected : {0u, 1u, 3u}) {
+    const auto frame = frames.TakeOne(10s);
+    ASSERT_TRUE(frame) << camera.Output();
+    EXPECT_EQ(frame->header.frame_seq, expected);
+    EXPECT_EQ(frame->header.stamp_ns, static_cast<int64_t>(expected) * 100'000'000);
+  }
+  EXPECT_TRUE(testing::AwaitHeartbeat(heartbeats, "camera",
+                                      [](const msg::ServiceStatus& s) { return s.messages_rejected >= 1; }, 5s))
+      << camera.Output();
+  EXPECT_NE(camera.Output().find("frame_002.png"), std::string::npos) << camera.Output();
 }
 
 TEST_F(CameraServiceTest, LoopContinuesFrameNumbersAndStampsUpwards) {
