@@ -35,18 +35,18 @@ class CameraNode::Impl {
 
   ~Impl() { Stop(); }
 
-  void Start() {
+  void Start(std::vector<std::shared_ptr<void>>& subscriptions) {
     publisher_ = context_.Advertise(bus::topics::kCameraImage);
     if (config_.source == "sim") {
       // The callback holds only a weak reference: the subscriber outlives the node.
       std::weak_ptr<Impl> weak = self_;
-      context_.Subscribe<msg::Image>(bus::topics::kSimCamera, [weak](const msg::Image& frame) {
+      subscriptions.push_back(context_.Subscribe<msg::Image>(bus::topics::kSimCamera, [weak](const msg::Image& frame) {
         if (auto self = weak.lock()) self->OnSimFrame(frame);
-      });
+      }));
       spdlog::info("republishing {} as {}", bus::topics::kSimCamera.name, bus::topics::kCameraImage.name);
       return;
     }
-    if (lockstep_) SubscribeLockstepTopics();
+    if (lockstep_) SubscribeLockstepTopics(subscriptions);
     source_ = OpenSource();
     spdlog::info("source: {}", source_->Describe());
     // The first frame is read and prepared here, so a source or crop that cannot work fails the
@@ -77,7 +77,7 @@ class CameraNode::Impl {
     return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
   }
 
-  void SubscribeLockstepTopics() {
+  void SubscribeLockstepTopics(std::vector<std::shared_ptr<void>>& subscriptions) {
     namespace t = bus::topics;
     std::weak_ptr<Impl> weak = self_;
     for (std::size_t i = 0; i < config_.lockstep_topics.size(); ++i) {
@@ -86,15 +86,15 @@ class CameraNode::Impl {
         if (auto self = weak.lock()) self->Report(stage, msg.header.frame_seq);
       };
       if (name == t::kOdometryVelocity.name) {
-        context_.Subscribe<msg::Velocity>(t::kOdometryVelocity, report);
+        subscriptions.push_back(context_.Subscribe<msg::Velocity>(t::kOdometryVelocity, report));
       } else if (name == t::kTemplatesView.name) {
-        context_.Subscribe<msg::ViewTemplate>(t::kTemplatesView, report);
+        subscriptions.push_back(context_.Subscribe<msg::ViewTemplate>(t::kTemplatesView, report));
       } else if (name == t::kPoseCellsAction.name) {
-        context_.Subscribe<msg::PoseCellAction>(t::kPoseCellsAction, report);
+        subscriptions.push_back(context_.Subscribe<msg::PoseCellAction>(t::kPoseCellsAction, report));
       } else if (name == t::kExperienceMapPose.name) {
-        context_.Subscribe<msg::ExperiencePose>(t::kExperienceMapPose, report);
+        subscriptions.push_back(context_.Subscribe<msg::ExperiencePose>(t::kExperienceMapPose, report));
       } else if (name == t::kOccupancyProfile.name) {
-        context_.Subscribe<msg::ObstacleProfile>(t::kOccupancyProfile, report);
+        subscriptions.push_back(context_.Subscribe<msg::ObstacleProfile>(t::kOccupancyProfile, report));
       } else {
         throw ConfigError("lockstep_topics", "unknown per-frame topic '" + name + "'");
       }
@@ -304,9 +304,12 @@ class CameraNode::Impl {
 
 CameraNode::CameraNode(ServiceContext& context, const Config& config) : impl_(std::make_shared<Impl>(context, config)) {
   impl_->set_self(impl_);
-  impl_->Start();
+  impl_->Start(subscriptions_);
 }
 
-CameraNode::~CameraNode() { impl_->Stop(); }
+CameraNode::~CameraNode() {
+  impl_->Stop();
+  subscriptions_.clear();  // joins the callback threads while the node is whole
+}
 
 }  // namespace rslam::camera

@@ -17,6 +17,7 @@
 // in the middle of a folder is counted as rejected and skipped (its frame number stays unused).
 
 #include <memory>
+#include <vector>
 
 #include "common/node/service_context.h"
 #include "services/camera/camera_node_config.h"
@@ -37,6 +38,8 @@ class CameraNode {
 
  private:
   std::shared_ptr<Impl> impl_;
+  // The node owns its subscriptions (the context keeps none): cleared first on destruction.
+  std::vector<std::shared_ptr<void>> subscriptions_;
 };
 
 }  // namespace rslam::camera

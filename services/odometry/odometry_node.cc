@@ -17,18 +17,20 @@ class OdometryNode::Impl {
   Impl(ServiceContext& context, const Config& config)
       : context_(context), config_(config), odometry_(config.visual) {}
 
-  void Start(const std::shared_ptr<Impl>& self) {
+  void Start(const std::shared_ptr<Impl>& self, std::vector<std::shared_ptr<void>>& subscriptions) {
     publisher_ = context_.Advertise(bus::topics::kOdometryVelocity);
     std::weak_ptr<Impl> weak = self;
     if (config_.use_wheel_odometry) {
-      context_.Subscribe<msg::Velocity>(bus::topics::kWheelOdometry, [weak](const msg::Velocity& v) {
-        if (auto impl = weak.lock()) impl->OnWheelOdometry(v);
-      });
+      subscriptions.push_back(
+          context_.Subscribe<msg::Velocity>(bus::topics::kWheelOdometry, [weak](const msg::Velocity& v) {
+            if (auto impl = weak.lock()) impl->OnWheelOdometry(v);
+          }));
       spdlog::info("republishing {} as {}", bus::topics::kWheelOdometry.name, bus::topics::kOdometryVelocity.name);
     } else {
-      context_.Subscribe<msg::Image>(bus::topics::kCameraImage, [weak](const msg::Image& image) {
-        if (auto impl = weak.lock()) impl->OnImage(image);
-      });
+      subscriptions.push_back(
+          context_.Subscribe<msg::Image>(bus::topics::kCameraImage, [weak](const msg::Image& image) {
+            if (auto impl = weak.lock()) impl->OnImage(image);
+          }));
     }
   }
 
@@ -123,9 +125,12 @@ class OdometryNode::Impl {
 
 OdometryNode::OdometryNode(ServiceContext& context, const Config& config)
     : impl_(std::make_shared<Impl>(context, config)) {
-  impl_->Start(impl_);
+  impl_->Start(impl_, subscriptions_);
 }
 
-OdometryNode::~OdometryNode() { impl_->Stop(); }
+OdometryNode::~OdometryNode() {
+  subscriptions_.clear();  // joins the callback thread
+  impl_->Stop();
+}
 
 }  // namespace rslam::odometry

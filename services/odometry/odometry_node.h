@@ -18,6 +18,7 @@
 // wheel messages with non-finite numbers or negative dt.
 
 #include <memory>
+#include <vector>
 
 #include "common/node/service_context.h"
 #include "services/odometry/odometry_node_config.h"
@@ -33,11 +34,13 @@ class OdometryNode {
   OdometryNode(const OdometryNode&) = delete;
   OdometryNode& operator=(const OdometryNode&) = delete;
 
-  // Shared with the subscriber's callback thread (which outlives the node briefly).
+  // Shared with the subscriber's callback thread.
   class Impl;
 
  private:
   std::shared_ptr<Impl> impl_;
+  // The node owns its subscription (the context keeps none): cleared first on destruction.
+  std::vector<std::shared_ptr<void>> subscriptions_;
 };
 
 }  // namespace rslam::odometry

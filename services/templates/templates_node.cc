@@ -77,12 +77,13 @@ class TemplatesNode::Impl {
     }
   }
 
-  void Start(const std::shared_ptr<Impl>& self) {
+  void Start(const std::shared_ptr<Impl>& self, std::vector<std::shared_ptr<void>>& subscriptions) {
     publisher_ = context_.Advertise(bus::topics::kTemplatesView);
     std::weak_ptr<Impl> weak = self;
-    context_.Subscribe<msg::Image>(bus::topics::kCameraImage, [weak](const msg::Image& image) {
-      if (auto impl = weak.lock()) impl->OnImage(image);
-    });
+    subscriptions.push_back(
+        context_.Subscribe<msg::Image>(bus::topics::kCameraImage, [weak](const msg::Image& image) {
+          if (auto impl = weak.lock()) impl->OnImage(image);
+        }));
   }
 
   void Tick() {
@@ -189,10 +190,13 @@ class TemplatesNode::Impl {
 
 TemplatesNode::TemplatesNode(ServiceContext& context, const Config& config)
     : impl_(std::make_shared<Impl>(context, config)) {
-  impl_->Start(impl_);
+  impl_->Start(impl_, subscriptions_);
 }
 
-TemplatesNode::~TemplatesNode() { impl_->Stop(); }
+TemplatesNode::~TemplatesNode() {
+  subscriptions_.clear();  // joins the callback thread: no view is learnt after the final save
+  impl_->Stop();
+}
 
 void TemplatesNode::Tick() { impl_->Tick(); }
 

@@ -17,6 +17,7 @@
 // rejected and dropped.
 
 #include <memory>
+#include <vector>
 
 #include "common/node/service_context.h"
 #include "services/templates/templates_node_config.h"
@@ -39,11 +40,13 @@ class TemplatesNode {
   // Periodic state save.
   void Tick();
 
-  // Shared with the subscriber's callback thread (which outlives the node briefly).
+  // Shared with the subscriber's callback thread.
   class Impl;
 
  private:
   std::shared_ptr<Impl> impl_;
+  // The node owns its subscription (the context keeps none): cleared first on destruction.
+  std::vector<std::shared_ptr<void>> subscriptions_;
 };
 
 }  // namespace rslam::templates
