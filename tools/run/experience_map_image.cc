@@ -37,7 +37,8 @@ cv::Mat DrawExperienceMap(const experience_map::ExperienceMap& map,
   const cv::Scalar link_colour(200, 140, 60), closure_colour(40, 40, 220);
   for (const auto& link : map.links()) {
     const bool closure = loop_closure_links.count({link.from_id, link.to_id}) > 0;
-    if (!closure) cv::line(plot, at(experiences[link.from_id]), at(experiences[link.to_id]), link_colour, 1, cv::LINE_AA);
+    if (!closure)
+      cv::line(plot, at(experiences[link.from_id]), at(experiences[link.to_id]), link_colour, 1, cv::LINE_AA);
   }
   for (const auto& link : map.links()) {
     if (loop_closure_links.count({link.from_id, link.to_id})) {
@@ -48,7 +49,8 @@ cv::Mat DrawExperienceMap(const experience_map::ExperienceMap& map,
   for (const auto& e : experiences) cv::circle(plot, at(e), radius, cv::Scalar(120, 40, 20), cv::FILLED, cv::LINE_AA);
   if (!experiences.empty()) {
     cv::circle(plot, at(experiences.front()), 6, cv::Scalar(40, 170, 40), 2, cv::LINE_AA);
-    if (map.has_current()) cv::circle(plot, at(experiences[map.current_id()]), 6, cv::Scalar(0, 140, 255), 2, cv::LINE_AA);
+    if (map.has_current())
+      cv::circle(plot, at(experiences[map.current_id()]), 6, cv::Scalar(0, 140, 255), 2, cv::LINE_AA);
   }
   // Legend.
   const int fx = axes.area().x + 10, fy = axes.area().y + 18;

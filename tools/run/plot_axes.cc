@@ -35,8 +35,7 @@ std::string TickLabel(double value, double step) {
 void PutCentred(cv::Mat& image, const std::string& text, cv::Point centre, double scale) {
   int baseline = 0;
   const cv::Size size = cv::getTextSize(text, kFont, scale, 1, &baseline);
-  cv::putText(image, text, {centre.x - size.width / 2, centre.y + size.height / 2}, kFont, scale, kInk, 1,
-              cv::LINE_AA);
+  cv::putText(image, text, {centre.x - size.width / 2, centre.y + size.height / 2}, kFont, scale, kInk, 1, cv::LINE_AA);
 }
 
 }  // namespace

@@ -30,8 +30,7 @@ void ProgressReporter::Print(uint64_t frames, uint64_t templates, uint64_t exper
   const double fps = seconds > 0 ? static_cast<double>(frames) / seconds : 0.0;
   char counts[160];
   std::snprintf(counts, sizeof counts, "%llu%s frames  %.1f fps  %llu templates  %llu experiences",
-                static_cast<unsigned long long>(frames),
-                total_ >= 0 ? ("/" + std::to_string(total_)).c_str() : "", fps,
+                static_cast<unsigned long long>(frames), total_ >= 0 ? ("/" + std::to_string(total_)).c_str() : "", fps,
                 static_cast<unsigned long long>(templates), static_cast<unsigned long long>(experiences));
   if (style_ == Style::kLines) {
     out_ << "rslam run: " << counts << "\n";

@@ -11,10 +11,8 @@ namespace rslam::run {
 
 namespace {
 
-constexpr std::array<std::string_view, 4> kCoreSections = {"odometry", "templates", "pose_cells",
-                                                            "experience_map"};
-constexpr std::array<std::string_view, 5> kOtherSections = {"bus", "service", "camera", "occupancy",
-                                                             "explorer"};
+constexpr std::array<std::string_view, 4> kCoreSections = {"odometry", "templates", "pose_cells", "experience_map"};
+constexpr std::array<std::string_view, 5> kOtherSections = {"bus", "service", "camera", "occupancy", "explorer"};
 
 bool Contains(const auto& list, const std::string& name) {
   for (std::string_view s : list) {

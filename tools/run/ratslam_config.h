@@ -21,9 +21,9 @@
 namespace rslam::run {
 
 struct RatSlamConfig {
-  odometry::OdometryNodeConfig odometry;              // .visual: the visual odometry
-  templates::TemplatesNodeConfig templates;           // .library: the template library
-  pose_cells::PoseCellsNodeConfig pose_cells;         // .network: the pose-cell network
+  odometry::OdometryNodeConfig odometry;                   // .visual: the visual odometry
+  templates::TemplatesNodeConfig templates;                // .library: the template library
+  pose_cells::PoseCellsNodeConfig pose_cells;              // .network: the pose-cell network
   experience_map::ExperienceMapNodeConfig experience_map;  // .map: the experience map
 };
 

@@ -27,17 +27,11 @@ cv::Mat ToGrey(const cv::Mat& image, cv::Mat& buffer) {
   if (image.empty()) throw std::invalid_argument("empty image");
   if (image.depth() != CV_8U) throw std::invalid_argument("image is not 8 bits per channel");
   switch (image.channels()) {
-    case 1:
-      return image;
-    case 3:
-      cv::cvtColor(image, buffer, cv::COLOR_BGR2GRAY);
-      return buffer;
-    case 4:
-      cv::cvtColor(image, buffer, cv::COLOR_BGRA2GRAY);
-      return buffer;
+    case 1: return image;
+    case 3: cv::cvtColor(image, buffer, cv::COLOR_BGR2GRAY); return buffer;
+    case 4: cv::cvtColor(image, buffer, cv::COLOR_BGRA2GRAY); return buffer;
     default:
-      throw std::invalid_argument("image has " + std::to_string(image.channels()) +
-                                  " channels (expected 1, 3 or 4)");
+      throw std::invalid_argument("image has " + std::to_string(image.channels()) + " channels (expected 1, 3 or 4)");
   }
 }
 

@@ -50,7 +50,7 @@ struct StageMicroseconds {
 struct FrameRecord {
   uint64_t frame_index = 0;  // 0, 1, 2, ... in processing order
   int64_t stamp_ns = 0;
-  double dt_s = 0.0;         // 0 for the first frame
+  double dt_s = 0.0;  // 0 for the first frame
   odometry::Velocity velocity;
   templates::ViewMatch view{};
   pose_cells::Action action;

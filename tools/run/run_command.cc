@@ -164,15 +164,19 @@ void RegisterRunCommand(CLI::App& rslam, std::ostream& out, std::ostream& err) {
   auto options = std::make_shared<RunOptions>();
   auto quiet = std::make_shared<bool>(false);
   auto fps = std::make_shared<double>(0.0);
-  CLI::App* run = rslam.add_subcommand(
-      "run", "Run the RatSLAM core (odometry, templates, pose cells, experience map) in one process on "
-             "recorded frames; writes summary.json, experiences.csv, templates.csv and pictures");
-  auto* images = run->add_option("--images", options->images, "Image folder (name order) or list file, one path a line");
+  CLI::App* run =
+      rslam.add_subcommand("run",
+                           "Run the RatSLAM core (odometry, templates, pose cells, experience map) in one process on "
+                           "recorded frames; writes summary.json, experiences.csv, templates.csv and pictures");
+  auto* images =
+      run->add_option("--images", options->images, "Image folder (name order) or list file, one path a line");
   auto* video = run->add_option("--video", options->video, "Video file (stamps from the file unless --fps)");
   images->excludes(video);
-  run->add_option("--preset", options->preset, "Preset name: deploy/presets/<P>.yaml (stlucia, irat, oxford, nordland)");
-  run->add_option("--config", options->config_file, "YAML file with sections odometry, templates, pose_cells, "
-                                                    "experience_map (over the preset)");
+  run->add_option("--preset", options->preset,
+                  "Preset name: deploy/presets/<P>.yaml (stlucia, irat, oxford, nordland)");
+  run->add_option("--config", options->config_file,
+                  "YAML file with sections odometry, templates, pose_cells, "
+                  "experience_map (over the preset)");
   run->add_option("--set", options->overrides, "Override section.key=value (repeatable)");
   auto* fps_option = run->add_option("--fps", *fps, "Frame rate for the stamps (default: odometry.camera_hz)");
   run->add_option("--out", options->out_dir, "Output folder")->required();

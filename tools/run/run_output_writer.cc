@@ -36,7 +36,9 @@ std::string Number(double value) {
 }
 
 nlohmann::json StageJson(const StageMicroseconds& s) {
-  return {{"odometry", s.odometry}, {"templates", s.templates}, {"pose_cells", s.pose_cells},
+  return {{"odometry", s.odometry},
+          {"templates", s.templates},
+          {"pose_cells", s.pose_cells},
           {"experience_map", s.experience_map}};
 }
 
@@ -78,8 +80,8 @@ void WriteExperiencesCsv(const std::filesystem::path& file, const experience_map
   std::ofstream out = OpenForWriting(file);
   out << "id,x,y,theta,template_id\n";
   for (const auto& e : map.experiences()) {
-    out << e.id << ',' << Number(e.x_m) << ',' << Number(e.y_m) << ',' << Number(e.th_rad) << ','
-        << e.template_id << '\n';
+    out << e.id << ',' << Number(e.x_m) << ',' << Number(e.y_m) << ',' << Number(e.th_rad) << ',' << e.template_id
+        << '\n';
   }
   Close(out, file);
 }
@@ -88,8 +90,8 @@ void WriteTemplatesCsv(const std::filesystem::path& file, const RunStatistics& s
   std::ofstream out = OpenForWriting(file);
   out << "frame,stamp_ns,template_id,is_new,template_count\n";
   for (const auto& p : statistics.template_curve()) {
-    out << p.frame << ',' << p.stamp_ns << ',' << p.template_id << ',' << (p.is_new ? 1 : 0) << ','
-        << p.template_count << '\n';
+    out << p.frame << ',' << p.stamp_ns << ',' << p.template_id << ',' << (p.is_new ? 1 : 0) << ',' << p.template_count
+        << '\n';
   }
   Close(out, file);
 }
@@ -104,8 +106,8 @@ void WritePng(const std::filesystem::path& file, const cv::Mat& image) {
   if (!written) throw std::runtime_error(file.string() + ": cannot write image");
 }
 
-void WriteRunOutputs(const std::filesystem::path& folder, const RatSlamRunner& runner,
-                     const RunStatistics& statistics, const nlohmann::json& summary) {
+void WriteRunOutputs(const std::filesystem::path& folder, const RatSlamRunner& runner, const RunStatistics& statistics,
+                     const nlohmann::json& summary) {
   std::error_code error;
   std::filesystem::create_directories(folder, error);
   if (error || !std::filesystem::is_directory(folder)) {
@@ -114,8 +116,7 @@ void WriteRunOutputs(const std::filesystem::path& folder, const RatSlamRunner& r
   }
   WriteExperiencesCsv(folder / "experiences.csv", runner.experience_map());
   WriteTemplatesCsv(folder / "templates.csv", statistics);
-  WritePng(folder / "experience_map.png",
-           DrawExperienceMap(runner.experience_map(), runner.loop_closure_links()));
+  WritePng(folder / "experience_map.png", DrawExperienceMap(runner.experience_map(), runner.loop_closure_links()));
   WritePng(folder / "templates.png", DrawTemplateCurve(statistics.template_curve()));
   // Last, so a summary means the other files are complete.
   WriteSummaryJson(folder / "summary.json", summary);

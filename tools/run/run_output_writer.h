@@ -21,12 +21,12 @@ namespace rslam::run {
 struct RunDescription {
   std::string preset;  // preset name, or "" when none
   std::string config_file;
-  std::string source;  // what the frames came from
+  std::string source;         // what the frames came from
   double wall_seconds = 0.0;  // whole run including decoding
 };
 
-nlohmann::json MakeSummary(const RatSlamRunner& runner, const RunStatistics& statistics,
-                           const RelaxResult& relax, const RunDescription& description);
+nlohmann::json MakeSummary(const RatSlamRunner& runner, const RunStatistics& statistics, const RelaxResult& relax,
+                           const RunDescription& description);
 
 void WriteSummaryJson(const std::filesystem::path& file, const nlohmann::json& summary);
 void WriteExperiencesCsv(const std::filesystem::path& file, const experience_map::ExperienceMap& map);
@@ -34,7 +34,7 @@ void WriteTemplatesCsv(const std::filesystem::path& file, const RunStatistics& s
 void WritePng(const std::filesystem::path& file, const cv::Mat& image);
 
 // All five files into folder (created if needed).
-void WriteRunOutputs(const std::filesystem::path& folder, const RatSlamRunner& runner,
-                     const RunStatistics& statistics, const nlohmann::json& summary);
+void WriteRunOutputs(const std::filesystem::path& folder, const RatSlamRunner& runner, const RunStatistics& statistics,
+                     const nlohmann::json& summary);
 
 }  // namespace rslam::run

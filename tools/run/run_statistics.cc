@@ -3,8 +3,8 @@
 namespace rslam::run {
 
 void RunStatistics::Add(const FrameRecord& record, uint32_t template_count) {
-  curve_.push_back(TemplateCurvePoint{record.frame_index, record.stamp_ns, record.view.template_id,
-                                      record.view.is_new, template_count});
+  curve_.push_back(TemplateCurvePoint{record.frame_index, record.stamp_ns, record.view.template_id, record.view.is_new,
+                                      template_count});
   total_.odometry += record.micros.odometry;
   total_.templates += record.micros.templates;
   total_.pose_cells += record.micros.pose_cells;

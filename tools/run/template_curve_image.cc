@@ -13,13 +13,13 @@ cv::Mat DrawTemplateCurve(const std::vector<TemplateCurvePoint>& curve, cv::Size
   const double frames = curve.empty() ? 1.0 : static_cast<double>(curve.back().frame + 1);
   const double templates = curve.empty() ? 1.0 : static_cast<double>(curve.back().template_count);
   const PlotAxes axes(size, {0.0, frames}, {0.0, templates * 1.05 + 1.0}, /*equal_scale=*/false);
-  cv::Mat image = axes.DrawFrame("templates learnt: " + std::to_string(static_cast<long long>(templates)) +
-                                     " over " + std::to_string(curve.size()) + " frames",
+  cv::Mat image = axes.DrawFrame("templates learnt: " + std::to_string(static_cast<long long>(templates)) + " over " +
+                                     std::to_string(curve.size()) + " frames",
                                  "frame", "templates stored");
   const double top = templates * 1.05 + 1.0;
   // The diagonal "every frame is new" for reference: the gap to it is the recognised frames.
-  cv::line(image, axes.ToPixelInt(0.0, 0.0),
-           axes.ToPixelInt(std::min(frames, top), std::min(frames, top)), cv::Scalar(190, 190, 190), 1, cv::LINE_AA);
+  cv::line(image, axes.ToPixelInt(0.0, 0.0), axes.ToPixelInt(std::min(frames, top), std::min(frames, top)),
+           cv::Scalar(190, 190, 190), 1, cv::LINE_AA);
   std::vector<cv::Point> line;
   line.reserve(curve.size() + 1);
   line.push_back(axes.ToPixelInt(0.0, 0.0));

@@ -136,8 +136,7 @@ TEST(RatSlamRunner, PrefilledTemplatesAndMeasurementsBuildAMap) {
   EXPECT_EQ(runner.templates().size(), 20u);
   EXPECT_EQ(runner.experience_map().experiences().size(), runner.pose_cells().experience_count());
   EXPECT_GE(runner.experience_map().experiences().size(), 20u);
-  EXPECT_THROW(runner.IntegrateMeasurements(v, 0.1, templates::ViewMatch{25, false, 0.0, 0.0}),
-               std::invalid_argument);
+  EXPECT_THROW(runner.IntegrateMeasurements(v, 0.1, templates::ViewMatch{25, false, 0.0, 0.0}), std::invalid_argument);
 }
 
 TEST(RatSlamRunner, AGapBeyondMaxFrameGapRestartsTheOdometryAsTheServiceDoes) {

@@ -220,8 +220,8 @@ TEST(RunCommandCli, UnknownPresetExitsTwoNamingIt) {
 TEST(RunCommandCli, UnknownConfigKeyExitsTwoNamingIt) {
   TempDir dir;
   const LoopRecording recording(dir.path(), 2);
-  const CliResult r = RunCli("--images " + recording.images.string() + " --preset stlucia --set templates.bogus_key=3 --out " +
-                             (dir.path() / "out").string());
+  const CliResult r = RunCli("--images " + recording.images.string() +
+                             " --preset stlucia --set templates.bogus_key=3 --out " + (dir.path() / "out").string());
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("templates.bogus_key"), std::string::npos) << r.output;
 
@@ -231,8 +231,8 @@ TEST(RunCommandCli, UnknownConfigKeyExitsTwoNamingIt) {
   EXPECT_EQ(section.exit_code, 2) << section.output;
   EXPECT_NE(section.output.find("local_view"), std::string::npos) << section.output;
 
-  const CliResult value = RunCli("--images " + recording.images.string() +
-                                 " --set pose_cells.pc_dim_xy=-4 --out " + (dir.path() / "out").string());
+  const CliResult value = RunCli("--images " + recording.images.string() + " --set pose_cells.pc_dim_xy=-4 --out " +
+                                 (dir.path() / "out").string());
   EXPECT_EQ(value.exit_code, 2) << value.output;
   EXPECT_NE(value.output.find("pose_cells.pc_dim_xy"), std::string::npos) << value.output;
 }
@@ -284,7 +284,8 @@ TEST(RunCommandRealData, IratFramesWithTheIratPreset) {
 }
 
 TEST(RunCommandRealData, NordlandSummerWithTheNordlandPreset) {
-  if (!SharedData() || !fs::is_directory(fs::path(SharedData()) / "nordland" / "summer")) GTEST_SKIP() << "no shared data";
+  if (!SharedData() || !fs::is_directory(fs::path(SharedData()) / "nordland" / "summer"))
+    GTEST_SKIP() << "no shared data";
   TempDir dir;
   RunOptions options;
   options.images = (fs::path(SharedData()) / "nordland" / "summer").string();
