@@ -10,7 +10,9 @@ namespace rslam::bus {
 
 enum class QosPreset {
   // Camera images: reliable, keep-last 8, volatile. A slow reader loses old frames rather
-  // than stalling the camera; a camera that must lose nothing waits for acknowledgments.
+  // than stalling the camera. (Acknowledgment is not consumption: a keep-last reader acks a
+  // sample when it reaches its cache, so a camera that must lose nothing paces itself on its
+  // readers' outputs instead: rslam-camera's lockstep mode.)
   kSensor,
   // Odometry, views, actions, commands: reliable, keep-all, volatile. Nothing is lost; a slow
   // reader applies back-pressure (the writer blocks up to max_blocking_ms).
