@@ -21,6 +21,43 @@ bool Contains(const auto& list, const std::string& name) {
   return false;
 }
 
+bool IsTrue(const YAML::Node& node) {
+  try {
+    return node && node.IsScalar() && node.as<bool>();
+  } catch (const YAML::Exception&) {
+    return false;
+  }
+}
+
+bool IsNonZero(const YAML::Node& node) {
+  try {
+    return node && node.IsScalar() && node.as<double>() != 0.0;
+  } catch (const YAML::Exception&) {
+    return true;  // not a number: not a crop the runner can ignore
+  }
+}
+
+// The camera service may change frames before anyone sees them (crop, anti-vignetting,
+// undistortion); the runner reads frames as the camera's sources deliver them, so such a config
+// would silently build a different map. Refused instead. (`grey` is fine: the stages convert
+// exactly as the camera would.)
+void CheckCameraPreparation(const YAML::Node& root) {
+  if (!root || !root.IsMap() || !root["camera"] || !root["camera"].IsMap()) return;
+  const YAML::Node camera = root["camera"];
+  for (const char* key : {"anti_vignetting", "undistort"}) {
+    if (IsTrue(camera[key])) {
+      throw ConfigError(std::string("camera.") + key, "rslam run does not prepare frames; correct them beforehand");
+    }
+  }
+  if (const YAML::Node crop = camera["crop"]; crop && crop.IsMap()) {
+    for (const char* key : {"x", "y", "width", "height"}) {
+      if (IsNonZero(crop[key])) {
+        throw ConfigError(std::string("camera.crop.") + key, "rslam run does not crop frames; crop them beforehand");
+      }
+    }
+  }
+}
+
 }  // namespace
 
 RatSlamConfig RatSlamConfigFromYaml(const YAML::Node& root) {
@@ -33,6 +70,7 @@ RatSlamConfig RatSlamConfigFromYaml(const YAML::Node& root) {
       }
     }
   }
+  CheckCameraPreparation(root);
   RatSlamConfig config;
   const YAML::Node document = root ? root : YAML::Node(YAML::NodeType::Map);
   LoadConfigSection(document, "odometry", config.odometry);

@@ -30,7 +30,9 @@ struct RatSlamConfig {
 // Fills every section from root over the defaults and validates. Throws ConfigError naming the
 // key for unknown keys, wrong types and bad values, and naming the section for an unknown
 // top-level section. Sections that configure other parts of the system (bus, service, camera,
-// occupancy, explorer) are accepted and ignored, so a service config file can be reused.
+// occupancy, explorer) are accepted and ignored, so a service config file can be reused; but a
+// camera section that changes the frames (crop, anti_vignetting, undistort) is a ConfigError,
+// because the runner does not apply it and would build a different map than the services.
 RatSlamConfig RatSlamConfigFromYaml(const YAML::Node& root);
 
 // Overlays `overlay` onto `base` (maps merged key by key, everything else replaced).

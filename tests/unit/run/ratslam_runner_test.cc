@@ -216,6 +216,23 @@ TEST(RatSlamConfig, UnknownSectionAndKeyAreNamed) {
   EXPECT_EQ(node_keys.odometry.max_frame_gap_s, 30.0);
 }
 
+TEST(RatSlamConfig, CameraPreparationTheRunnerDoesNotApplyIsRefused) {
+  EXPECT_NO_THROW(RatSlamConfigFromYaml(YAML::Load("camera:\n  grey: true\n  fps: 10\n")));
+  EXPECT_NO_THROW(RatSlamConfigFromYaml(YAML::Load("camera:\n  crop: {x: 0, y: 0, width: 0, height: 0}\n")));
+  try {
+    RatSlamConfigFromYaml(YAML::Load("camera:\n  undistort: true\n"));
+    FAIL() << "undistortion accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.key(), "camera.undistort");
+  }
+  try {
+    RatSlamConfigFromYaml(YAML::Load("camera:\n  crop: {x: 0, y: 20}\n"));
+    FAIL() << "crop accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.key(), "camera.crop.y");
+  }
+}
+
 TEST(RatSlamConfig, ConfigFileOverPresetThenOverrides) {
   YAML::Node base = YAML::Load("templates:\n  match_threshold: 0.1\n  shift_match: 3\n");
   MergeYaml(base, YAML::Load("templates:\n  shift_match: 4\nodometry:\n  camera_hz: 5\n"));
