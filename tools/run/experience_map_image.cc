@@ -54,15 +54,19 @@ cv::Mat DrawExperienceMap(const experience_map::ExperienceMap& map,
   }
   // Legend.
   const int fx = axes.area().x + 10, fy = axes.area().y + 18;
-  auto legend = [&](int row, const cv::Scalar& colour, const std::string& text) {
-    cv::circle(image, {fx, fy + 18 * row - 4}, 5, colour, cv::FILLED, cv::LINE_AA);
+  auto legend = [&](int row, const cv::Scalar& colour, const std::string& text, int line_width = 0) {
+    if (line_width > 0) {
+      cv::line(image, {fx - 6, fy + 18 * row - 4}, {fx + 6, fy + 18 * row - 4}, colour, line_width, cv::LINE_AA);
+    } else {
+      cv::circle(image, {fx, fy + 18 * row - 4}, 5, colour, 2, cv::LINE_AA);
+    }
     cv::putText(image, text, {fx + 12, fy + 18 * row}, cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(40, 40, 40), 1,
                 cv::LINE_AA);
   };
   legend(0, cv::Scalar(40, 170, 40), "first experience");
   legend(1, cv::Scalar(0, 140, 255), "current experience");
-  legend(2, link_colour, "link");
-  legend(3, closure_colour, "loop closure link");
+  legend(2, link_colour, "link", 1);
+  legend(3, closure_colour, "loop closure link", 2);
   return image;
 }
 

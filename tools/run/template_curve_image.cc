@@ -25,6 +25,13 @@ cv::Mat DrawTemplateCurve(const std::vector<TemplateCurvePoint>& curve, cv::Size
   line.push_back(axes.ToPixelInt(0.0, 0.0));
   for (const auto& p : curve) line.push_back(axes.ToPixelInt(static_cast<double>(p.frame + 1), p.template_count));
   cv::polylines(image, line, false, cv::Scalar(160, 60, 20), 2, cv::LINE_AA);
+  const cv::Point legend = axes.area().tl() + cv::Point(12, 18);
+  cv::line(image, legend + cv::Point(0, -4), legend + cv::Point(24, -4), cv::Scalar(160, 60, 20), 2, cv::LINE_AA);
+  cv::putText(image, "templates stored", legend + cv::Point(30, 0), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+              cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
+  cv::line(image, legend + cv::Point(0, 14), legend + cv::Point(24, 14), cv::Scalar(190, 190, 190), 1, cv::LINE_AA);
+  cv::putText(image, "one new template per frame", legend + cv::Point(30, 18), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+              cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
   return image;
 }
 
