@@ -80,11 +80,6 @@ class ExperienceMapNode::Mapper {
 
   ~Mapper() { StopIdleThread(); }
 
-  static void Subscribe(const std::shared_ptr<Mapper>& self) {
-    self->context_.Subscribe<msg::PoseCellAction>(bus::topics::kPoseCellsAction,
-                                                  [self](const msg::PoseCellAction& m) { self->OnAction(m); });
-  }
-
   // Stops processing, then saves the state (and the user's map file).
   void Stop() {
     {
@@ -115,10 +110,6 @@ class ExperienceMapNode::Mapper {
     SaveState(false);
   }
 
- private:
-  // ------------------------------------------------------------------------------------------
-  // Input
-
   void OnAction(const msg::PoseCellAction& a) {
     std::lock_guard lock(mutex_);
     if (stopped_) return;
@@ -136,6 +127,7 @@ class ExperienceMapNode::Mapper {
     Drain(/*give_up_gap=*/false);
   }
 
+ private:
   std::string ActionProblem(const msg::PoseCellAction& a) const {
     if (!std::isfinite(a.vtrans_mps) || !std::isfinite(a.vrot_radps) || !std::isfinite(a.dt_s))
       return "odometry has a non-finite number";
@@ -394,11 +386,16 @@ class ExperienceMapNode::Mapper {
 };
 
 ExperienceMapNode::ExperienceMapNode(ServiceContext& context, const Config& config)
-    : mapper_(std::make_shared<Mapper>(context, config)) {
-  Mapper::Subscribe(mapper_);
+    : mapper_(std::make_unique<Mapper>(context, config)) {
+  Mapper* m = mapper_.get();
+  action_sub_ = context.Subscribe<msg::PoseCellAction>(bus::topics::kPoseCellsAction,
+                                                       [m](const msg::PoseCellAction& a) { m->OnAction(a); });
 }
 
-ExperienceMapNode::~ExperienceMapNode() { mapper_->Stop(); }
+ExperienceMapNode::~ExperienceMapNode() {
+  action_sub_.reset();  // no callback runs after this
+  mapper_->Stop();
+}
 
 void ExperienceMapNode::Tick() { mapper_->Tick(); }
 

@@ -38,12 +38,12 @@ class ExperienceMapNode {
   // Periodic state save (every service.state_save_period_s).
   void Tick();
 
-  // Shared with the subscriber thread, which the runtime keeps alive a little longer than the
-  // node: it holds the mapper and finds it stopped.
   class Mapper;
 
  private:
-  std::shared_ptr<Mapper> mapper_;
+  std::unique_ptr<Mapper> mapper_;
+  // Owned here (the context keeps none): destroyed first, which stops its callbacks.
+  std::shared_ptr<bus::Subscriber<msg::PoseCellAction>> action_sub_;
 };
 
 }  // namespace rslam::experience_map

@@ -55,14 +55,30 @@ class PoseCellsNode::Processor {
     action_pub_ = context_.Advertise(bus::topics::kPoseCellsAction);
   }
 
-  // Inputs are subscribed before the resynchronisation, so frames arriving meanwhile wait in
-  // the joiner instead of being lost (the input topics are volatile).
-  static void Subscribe(const std::shared_ptr<Processor>& self) {
-    ServiceContext& ctx = self->context_;
-    ctx.Subscribe<msg::Velocity>(bus::topics::kOdometryVelocity,
-                                 [self](const msg::Velocity& m) { self->OnVelocity(m); });
-    ctx.Subscribe<msg::ViewTemplate>(bus::topics::kTemplatesView,
-                                     [self](const msg::ViewTemplate& m) { self->OnView(m); });
+  void OnVelocity(const msg::Velocity& v) {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    const uint64_t seq = v.header.frame_seq;
+    if (const std::string problem = VelocityProblem(v); !problem.empty()) {
+      context_.Reject("velocity", problem);
+      joiner_.SkipVelocity(seq);
+    } else if (!joiner_.AddVelocity(seq, v, NowNs())) {
+      context_.Reject("late_velocity", "odometry for frame " + std::to_string(seq) + " came after the frame was processed");
+    }
+    ProcessReady();
+  }
+
+  void OnView(const msg::ViewTemplate& v) {
+    std::lock_guard lock(mutex_);
+    if (stopped_) return;
+    const uint64_t seq = v.header.frame_seq;
+    if (const std::string problem = ViewProblem(v); !problem.empty()) {
+      context_.Reject("view", problem);
+      joiner_.SkipView(seq);
+    } else if (!joiner_.AddView(seq, v, NowNs())) {
+      context_.Reject("late_view", "view for frame " + std::to_string(seq) + " came after the frame was processed");
+    }
+    ProcessReady();
   }
 
   void Resynchronise() {
@@ -96,33 +112,7 @@ class PoseCellsNode::Processor {
 
  private:
   // ------------------------------------------------------------------------------------------
-  // Input
-
-  void OnVelocity(const msg::Velocity& v) {
-    std::lock_guard lock(mutex_);
-    if (stopped_) return;
-    const uint64_t seq = v.header.frame_seq;
-    if (const std::string problem = VelocityProblem(v); !problem.empty()) {
-      context_.Reject("velocity", problem);
-      joiner_.SkipVelocity(seq);
-    } else if (!joiner_.AddVelocity(seq, v, NowNs())) {
-      context_.Reject("late_velocity", "odometry for frame " + std::to_string(seq) + " came after the frame was processed");
-    }
-    ProcessReady();
-  }
-
-  void OnView(const msg::ViewTemplate& v) {
-    std::lock_guard lock(mutex_);
-    if (stopped_) return;
-    const uint64_t seq = v.header.frame_seq;
-    if (const std::string problem = ViewProblem(v); !problem.empty()) {
-      context_.Reject("view", problem);
-      joiner_.SkipView(seq);
-    } else if (!joiner_.AddView(seq, v, NowNs())) {
-      context_.Reject("late_view", "view for frame " + std::to_string(seq) + " came after the frame was processed");
-    }
-    ProcessReady();
-  }
+  // Input validation
 
   std::string VelocityProblem(const msg::Velocity& v) const {
     if (!std::isfinite(v.vtrans_mps) || !std::isfinite(v.vrot_radps) || !std::isfinite(v.dt_s))
@@ -384,12 +374,22 @@ class PoseCellsNode::Processor {
 };
 
 PoseCellsNode::PoseCellsNode(ServiceContext& context, const Config& config)
-    : processor_(std::make_shared<Processor>(context, config)) {
-  Processor::Subscribe(processor_);
+    : processor_(std::make_unique<Processor>(context, config)) {
+  // Inputs are subscribed before the resynchronisation, so frames arriving meanwhile wait in the
+  // joiner instead of being lost (the input topics are volatile).
+  Processor* p = processor_.get();
+  velocity_sub_ = context.Subscribe<msg::Velocity>(bus::topics::kOdometryVelocity,
+                                                   [p](const msg::Velocity& m) { p->OnVelocity(m); });
+  view_sub_ = context.Subscribe<msg::ViewTemplate>(bus::topics::kTemplatesView,
+                                                   [p](const msg::ViewTemplate& m) { p->OnView(m); });
   processor_->Resynchronise();
 }
 
-PoseCellsNode::~PoseCellsNode() { processor_->Stop(); }
+PoseCellsNode::~PoseCellsNode() {
+  velocity_sub_.reset();  // no callback runs after this
+  view_sub_.reset();
+  processor_->Stop();
+}
 
 void PoseCellsNode::Tick() { processor_->Tick(); }
 

@@ -41,12 +41,13 @@ class PoseCellsNode {
   // Periodic state save (every service.state_save_period_s).
   void Tick();
 
-  // Shared with the subscriber threads, which the runtime keeps alive a little longer than the
-  // node: they hold the processor and find it stopped.
   class Processor;
 
  private:
-  std::shared_ptr<Processor> processor_;
+  std::unique_ptr<Processor> processor_;
+  // Owned here (the context keeps none): destroyed first, which stops their callbacks.
+  std::shared_ptr<bus::Subscriber<msg::Velocity>> velocity_sub_;
+  std::shared_ptr<bus::Subscriber<msg::ViewTemplate>> view_sub_;
 };
 
 }  // namespace rslam::pose_cells

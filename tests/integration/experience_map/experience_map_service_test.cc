@@ -48,6 +48,7 @@ class ExperienceMapServiceTest : public ::testing::Test {
  protected:
   ExperienceMapServiceTest() {
     bus::BusConfig config;
+    config.ApplyEnvironment();  // RSLAM_DDS picks the vendor of the test and the services alike
     config.domain_id = domain_.id();
     participant_ = bus::Participant::Create(config);
     action_pub_ = std::make_unique<bus::Publisher<msg::PoseCellAction>>(*participant_, bus::topics::kPoseCellsAction);

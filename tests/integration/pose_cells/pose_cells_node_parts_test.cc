@@ -148,7 +148,7 @@ TEST(AdoptExperienceMapTest, NextCreatedIdFollowsTheMapsExperiences) {
   behind.AdoptExperienceMap(map, links, current);
   EXPECT_EQ(behind.experience_count(), map.size());
   EXPECT_EQ(behind.template_count(), ahead.template_count());
-  EXPECT_NEAR(behind.BestPose().x, map[current].cell.x, 1e-9);
+  EXPECT_NEAR(behind.BestPose().x, map[current].cell.x, 0.5);  // the packet restarts in that cell
   // Drive on past the adopted experiences: the next create carries the map's next id.
   Action next;
   for (uint64_t i = testing::kLapFrames; next.kind != Action::Kind::kCreate && i < 3 * testing::kLapFrames; ++i) {

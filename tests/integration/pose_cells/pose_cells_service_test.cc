@@ -44,6 +44,7 @@ class PoseCellsServiceTest : public ::testing::Test {
  protected:
   PoseCellsServiceTest() {
     bus::BusConfig config;
+    config.ApplyEnvironment();  // RSLAM_DDS picks the vendor of the test and the services alike
     config.domain_id = domain_.id();
     participant_ = bus::Participant::Create(config);
     velocity_pub_ = std::make_unique<bus::Publisher<msg::Velocity>>(*participant_, bus::topics::kOdometryVelocity);
