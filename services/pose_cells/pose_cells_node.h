@@ -19,7 +19,9 @@
 // experience map's snapshot: the map may have applied actions beyond the saved state (and hold
 // experiences the restored network does not know), or missed some. The node adopts the map's
 // experiences and continues action_seq after the map's last applied action, so experience ids
-// of the two services can never collide.
+// of the two services can never collide. The frames missed while down moved the robot: they are
+// bridged at the recent forward speed, and the first familiar view relocalises the packet.
+// Templates learnt while down (their ids fit in the missed frames) are placed when next seen.
 
 #include <memory>
 
