@@ -26,20 +26,6 @@ experience_map::ExperienceAction::Kind ToExperienceKind(msg::ActionKind kind) {
   return experience_map::ExperienceAction::Kind::kNone;
 }
 
-template <class A>
-void SetRelativeAngle(A& message, double angle_rad) {
-  if constexpr (requires { message.relative_angle_rad; }) message.relative_angle_rad = angle_rad;
-}
-
-template <class A>
-double RelativeAngle(const A& message) {
-  if constexpr (requires { message.relative_angle_rad; }) {
-    return message.relative_angle_rad;
-  } else {
-    return 0.0;
-  }
-}
-
 }  // namespace
 
 msg::PoseCellAction PoseCellActionMessage(const pose_cells::Action& action, uint64_t action_seq, double vtrans_mps,
@@ -56,7 +42,7 @@ msg::PoseCellAction PoseCellActionMessage(const pose_cells::Action& action, uint
   out.vtrans_mps = vtrans_mps;
   out.vrot_radps = vrot_radps;
   out.dt_s = dt_s;
-  SetRelativeAngle(out, action.relative_angle_rad);
+  out.relative_angle_rad = action.relative_angle_rad;
   return out;
 }
 
@@ -66,7 +52,7 @@ experience_map::ExperienceAction ExperienceActionFromMessage(const msg::PoseCell
   a.experience_id = m.experience_id;
   a.from_experience_id = m.from_experience_id;
   a.template_id = m.template_id;
-  a.relative_angle_rad = RelativeAngle(m);
+  a.relative_angle_rad = m.relative_angle_rad;
   a.pc_x = m.pc_x;
   a.pc_y = m.pc_y;
   a.pc_th = m.pc_th;
