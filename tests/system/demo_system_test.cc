@@ -74,7 +74,9 @@ CommandResult RunCommand(const std::vector<std::string>& command, const fs::path
 // `rslam demo` when the command line has it, else the standalone driver.
 std::vector<std::string> DemoCommand() {
   const std::string rslam = RSLAM_BINARY_DIR "/bin/rslam";
-  if (::access(rslam.c_str(), X_OK) == 0 && std::system(("'" + rslam + "' demo --help >/dev/null 2>&1").c_str()) == 0)
+  // `rslam demo --help` exits 0 even without the subcommand (help wins): look for it in the list.
+  if (::access(rslam.c_str(), X_OK) == 0 &&
+      std::system(("'" + rslam + "' --help 2>&1 | grep -Eq '^ +demo( |$)'").c_str()) == 0)
     return {rslam, "demo"};
   return {RSLAM_BINARY_DIR "/bin/rslam-demo-driver", "demo"};
 }

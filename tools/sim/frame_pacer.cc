@@ -46,6 +46,14 @@ bool FramePacer::MayPublish(uint64_t frame_seq, Clock::time_point now) const {
   return true;
 }
 
+bool FramePacer::PassingAbsentStage(uint64_t frame_seq, Clock::time_point now) const {
+  if (frame_seq < static_cast<uint64_t>(max_frames_in_flight_)) return false;
+  const uint64_t needed = frame_seq - static_cast<uint64_t>(max_frames_in_flight_);
+  for (const Stage& s : stages_)
+    if (!s.last_seq || *s.last_seq < needed) return true;
+  return false;
+}
+
 std::optional<uint64_t> FramePacer::LastReported(int stage) const {
   if (stage < 0 || stage >= stage_count())
     throw std::out_of_range("FramePacer: stage " + std::to_string(stage) + " out of range");

@@ -28,6 +28,9 @@ class FramePacer {
   void Report(int stage, uint64_t frame_seq, Clock::time_point now);
   // Whether frame_seq may be published now.
   bool MayPublish(uint64_t frame_seq, Clock::time_point now) const;
+  // Whether frame_seq may go only because a stage that is behind is silent or never came up:
+  // the caller then paces itself (real time), so a missing stage does not make it run flat out.
+  bool PassingAbsentStage(uint64_t frame_seq, Clock::time_point now) const;
   // The latest frame a stage reported, if any.
   std::optional<uint64_t> LastReported(int stage) const;
 

@@ -179,8 +179,17 @@ bool SimNode::WaitForSlot(uint64_t frame_seq, Clock::time_point slot) {
   }
   pacer_.Start(Clock::now());
   // The pacer's answer changes with reports (which wake us) and with time (timeouts): poll too.
-  while (!stop_ && !pacer_.MayPublish(frame_seq, Clock::now()))
-    wake_.wait_for(lock, std::chrono::milliseconds(20));
+  // Past a silent or missing stage the sim keeps real time (one frame per time step), as a robot
+  // would: flat out it would flood the stages that are there and they could never catch up.
+  const auto real_time_slot = last_frame_time_ + Seconds(config_.sim.motion.time_step_s);
+  while (!stop_) {
+    const auto now = Clock::now();
+    if (pacer_.MayPublish(frame_seq, now) &&
+        (!pacer_.PassingAbsentStage(frame_seq, now) || now >= real_time_slot))
+      break;
+    wake_.wait_for(lock, std::chrono::milliseconds(5));
+  }
+  last_frame_time_ = Clock::now();
   return !stop_;
 }
 

@@ -88,6 +88,7 @@ class SimNode {
   std::optional<uint64_t> running_command_seq_;  // the command the body is executing
   bool stop_ = false;
   Pose2D last_pose_;  // for the periodic log line
+  std::chrono::steady_clock::time_point last_frame_time_{};  // lockstep: when the last frame went
   int ticks_ = 0;     // Tick() calls (heartbeat thread only)
 
   msg::Image image_msg_;  // reused buffer

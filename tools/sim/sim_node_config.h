@@ -29,11 +29,12 @@ struct SimNodeConfig {
   // occupancy/profile).
   std::vector<std::string> lockstep_topics = {"experience_map/pose", "occupancy/profile"};
   // A stage that has reported before but stays silent this long is not waited for any more (until
-  // it reports again), so a crashed stage stalls the sim once, not forever.
+  // it reports again), so a crashed stage stalls the sim once, not forever; meanwhile frames go
+  // out in real time (one per time step).
   double lockstep_timeout_s = 2.0;
   // A stage that has never reported is waited for this long after the first frame (services
   // start, join the bus and discover each other in this time).
-  double startup_timeout_s = 5.0;
+  double startup_timeout_s = 15.0;
   // Before the first frame, wait up to this long for a reader of sim/camera (the camera service)
   // and a publisher on every lockstep topic, then pipeline_settle_s more for the services in
   // between to match each other. 0 = start at once.

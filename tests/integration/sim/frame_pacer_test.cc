@@ -59,6 +59,17 @@ TEST(FramePacerTest, WaitsForAStageThatNeverReportedOnlyUntilTheStartupTimeout) 
   EXPECT_TRUE(pacer.MayPublish(5, t0 + seconds(10)));
 }
 
+TEST(FramePacerTest, SaysWhenAFrameGoesOnlyBecauseAStageIsAbsent) {
+  FramePacer pacer(2, 0, seconds(2), seconds(10));
+  const auto t0 = Clock::time_point{} + seconds(100);
+  pacer.Start(t0);
+  pacer.Report(0, 10, t0);
+  pacer.Report(1, 10, t0);
+  EXPECT_FALSE(pacer.PassingAbsentStage(10, t0));  // everyone is there
+  EXPECT_TRUE(pacer.PassingAbsentStage(11, t0 + seconds(3)));
+  EXPECT_TRUE(pacer.MayPublish(11, t0 + seconds(3)));
+}
+
 TEST(FramePacerTest, NoStagesMeansNoWaiting) {
   FramePacer pacer(0, 0, seconds(2), seconds(10));
   pacer.Start(Clock::time_point{});
