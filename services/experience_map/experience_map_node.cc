@@ -1,5 +1,7 @@
 #include "services/experience_map/experience_map_node.h"
 
+#include "services/experience_map/experience_action_message.h"
+
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -30,40 +32,6 @@ using Clock = std::chrono::steady_clock;
 
 Clock::duration Seconds(double s) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
-}
-
-ExperienceAction::Kind ToKind(msg::ActionKind kind) {
-  switch (kind) {
-    case msg::ActionKind::ACTION_CREATE: return ExperienceAction::Kind::kCreate;
-    case msg::ActionKind::ACTION_LINK: return ExperienceAction::Kind::kLink;
-    case msg::ActionKind::ACTION_SET: return ExperienceAction::Kind::kSet;
-    case msg::ActionKind::ACTION_NONE: break;
-  }
-  return ExperienceAction::Kind::kNone;
-}
-
-// The view's orientation offset travels with the action once the IDL carries it.
-template <class A>
-double RelativeAngle(const A& a) {
-  if constexpr (requires { a.relative_angle_rad; }) {
-    return a.relative_angle_rad;
-  } else {
-    return 0.0;
-  }
-}
-
-ExperienceAction ToAction(const msg::PoseCellAction& m) {
-  ExperienceAction a;
-  a.kind = ToKind(m.kind);
-  a.experience_id = m.experience_id;
-  a.from_experience_id = m.from_experience_id;
-  a.template_id = m.template_id;
-  a.relative_angle_rad = RelativeAngle(m);
-  a.pc_x = m.pc_x;
-  a.pc_y = m.pc_y;
-  a.pc_th = m.pc_th;
-  a.sequence = m.action_seq;
-  return a;
 }
 
 }  // namespace
@@ -134,7 +102,7 @@ class ExperienceMapNode::Mapper {
     if (a.dt_s < 0 || a.dt_s > config_.max_dt_s) return "dt " + std::to_string(a.dt_s) + " s is outside [0, max_dt_s]";
     if (!std::isfinite(a.pc_x) || !std::isfinite(a.pc_y) || !std::isfinite(a.pc_th))
       return "pose-cell position is not finite";
-    if (!std::isfinite(RelativeAngle(a))) return "relative angle is not finite";
+    if (!std::isfinite(a.relative_angle_rad)) return "relative angle is not finite";
     return "";
   }
 
@@ -173,7 +141,7 @@ class ExperienceMapNode::Mapper {
     const size_t links_before = map_.links().size();
     map_.Integrate(m.vtrans_mps, m.vrot_radps, m.dt_s);  // validated on arrival
     try {
-      map_.Apply(ToAction(m));
+      map_.Apply(FromActionMessage(m));
     } catch (const std::invalid_argument& e) {
       context_.Reject("action_ids", "action " + std::to_string(m.action_seq) + " (" + msg::ToString(m.kind) + "): " + e.what());
       map_.Apply(ExperienceAction{});  // the frame's correction budget is still spent

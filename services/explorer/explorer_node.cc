@@ -88,19 +88,21 @@ class ExplorerNode::Controller {
     PublishStatusIfChanged(/*force=*/true);
   }
 
-  // The callbacks share the controller; the context keeps its subscribers (and so the
-  // controller) alive until after the node is gone, and Stop() makes late callbacks return.
-  static void Subscribe(const std::shared_ptr<Controller>& self) {
+  // The callbacks share the controller; the node holds the subscribers and drops them before
+  // Stop().
+  static std::vector<std::shared_ptr<void>> Subscribe(const std::shared_ptr<Controller>& self) {
     ServiceContext& ctx = self->context_;
-    ctx.Subscribe<msg::OccupancyGrid>(bus::topics::kOccupancyGrid, [self](const msg::OccupancyGrid& m) {
+    std::vector<std::shared_ptr<void>> subscriptions;
+    subscriptions.push_back(ctx.Subscribe<msg::OccupancyGrid>(bus::topics::kOccupancyGrid, [self](const msg::OccupancyGrid& m) {
       Guarded("grid", [&] { self->OnGrid(m); });
-    });
-    ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose, [self](const msg::ExperiencePose& m) {
+    }));
+    subscriptions.push_back(ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose, [self](const msg::ExperiencePose& m) {
       Guarded("pose", [&] { self->OnPose(m); });
-    });
-    ctx.Subscribe<msg::MotionFeedback>(bus::topics::kMotionFeedback, [self](const msg::MotionFeedback& m) {
+    }));
+    subscriptions.push_back(ctx.Subscribe<msg::MotionFeedback>(bus::topics::kMotionFeedback, [self](const msg::MotionFeedback& m) {
       Guarded("feedback", [&] { self->OnFeedback(m); });
-    });
+    }));
+    return subscriptions;
   }
 
   // A robot must not go on driving a plan nobody watches any more: an outstanding command is
@@ -395,10 +397,13 @@ class ExplorerNode::Controller {
 
 ExplorerNode::ExplorerNode(ServiceContext& context, const Config& config)
     : controller_(std::make_shared<Controller>(context, config)) {
-  Controller::Subscribe(controller_);
+  subscriptions_ = Controller::Subscribe(controller_);
 }
 
-ExplorerNode::~ExplorerNode() { controller_->Stop(); }
+ExplorerNode::~ExplorerNode() {
+  subscriptions_.clear();  // no callback runs after this
+  controller_->Stop();
+}
 
 void ExplorerNode::Tick() { controller_->Tick(); }
 

@@ -19,6 +19,7 @@
 // blocked counts, last pirouette) and the command numbering persist in <state_dir>/explorer.pb.
 
 #include <memory>
+#include <vector>
 
 #include "common/node/service_context.h"
 #include "services/explorer/explorer_node_config.h"
@@ -43,6 +44,7 @@ class ExplorerNode {
 
  private:
   std::shared_ptr<Controller> controller_;
+  std::vector<std::shared_ptr<void>> subscriptions_;
 };
 
 }  // namespace rslam::explorer

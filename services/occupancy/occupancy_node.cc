@@ -102,19 +102,20 @@ class OccupancyNode::Mapper {
     }
   }
 
-  // Subscriptions are made once the mapper is owned by a shared_ptr. The callbacks share it: the
-  // context keeps its subscribers (and so the mapper) alive until it is destroyed itself, after
-  // the node, and Stop() makes late callbacks return at once.
-  static void Subscribe(const std::shared_ptr<Mapper>& self) {
+  // Subscriptions are made once the mapper is owned by a shared_ptr, which the callbacks share;
+  // the node holds the subscribers and drops them before Stop().
+  static std::vector<std::shared_ptr<void>> Subscribe(const std::shared_ptr<Mapper>& self) {
     ServiceContext& ctx = self->context_;
-    ctx.Subscribe<msg::Image>(bus::topics::kCameraImage,
-                              [self](const msg::Image& m) { Guarded("image", [&] { self->OnImage(m); }); });
-    ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose, [self](const msg::ExperiencePose& m) {
+    std::vector<std::shared_ptr<void>> subscriptions;
+    subscriptions.push_back(ctx.Subscribe<msg::Image>(bus::topics::kCameraImage,
+                              [self](const msg::Image& m) { Guarded("image", [&] { self->OnImage(m); }); }));
+    subscriptions.push_back(ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose, [self](const msg::ExperiencePose& m) {
       Guarded("pose", [&] { self->OnPose(m); });
-    });
-    ctx.Subscribe<msg::ExperienceMap>(bus::topics::kExperienceMapMap, [self](const msg::ExperienceMap& m) {
+    }));
+    subscriptions.push_back(ctx.Subscribe<msg::ExperienceMap>(bus::topics::kExperienceMapMap, [self](const msg::ExperienceMap& m) {
       Guarded("map", [&] { self->OnMap(m); });
-    });
+    }));
+    return subscriptions;
   }
 
   // Stops processing, then saves the state and exports the grid.
@@ -329,10 +330,13 @@ class OccupancyNode::Mapper {
 
 OccupancyNode::OccupancyNode(ServiceContext& context, const Config& config)
     : mapper_(std::make_shared<Mapper>(context, config)) {
-  Mapper::Subscribe(mapper_);
+  subscriptions_ = Mapper::Subscribe(mapper_);
 }
 
-OccupancyNode::~OccupancyNode() { mapper_->Stop(); }
+OccupancyNode::~OccupancyNode() {
+  subscriptions_.clear();  // no callback runs after this
+  mapper_->Stop();
+}
 
 void OccupancyNode::Tick() { mapper_->Tick(); }
 

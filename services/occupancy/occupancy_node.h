@@ -16,6 +16,7 @@
 // grid.pgm + grid.yaml (ROS map_server) and occupancy.png into the state dir.
 
 #include <memory>
+#include <vector>
 
 #include "common/node/service_context.h"
 #include "services/occupancy/occupancy_node_config.h"
@@ -41,6 +42,7 @@ class OccupancyNode {
 
  private:
   std::shared_ptr<Mapper> mapper_;
+  std::vector<std::shared_ptr<void>> subscriptions_;
 };
 
 }  // namespace rslam::occupancy

@@ -185,6 +185,8 @@ Velocity VisualOdometry::Update(const cv::Mat& grey, double dt_s) {
   const double moving_difference = std::max(speed.difference - config_.vtrans_noise_floor, 0.0);
   velocity.vtrans =
       std::min(moving_difference * config_.vtrans_scaling / (config_.camera_hz * dt_s), config_.vtrans_max);
+  if (config_.turn_in_place_vrot_radps > 0 && std::abs(velocity.vrot) >= config_.turn_in_place_vrot_radps)
+    velocity.vtrans = 0.0;
   return velocity;
 }
 

@@ -30,6 +30,10 @@ struct VisualOdometryConfig {
   // Compare profiles after matching their overlap's mean (exposure gain): a global exposure
   // change then does not read as speed.
   bool normalise_profile_brightness = true;
+  // A robot that turns on the spot (turn-then-drive motion, paper 003) is not moving forward:
+  // at or above this rotation rate the speed is taken as 0, because perspective makes the view
+  // change during a turn read as speed. 0 = off (OpenRatSLAM behaviour, for cars).
+  double turn_in_place_vrot_radps = 0.0;
 
   template <class V>
   void VisitFields(V& v) {
@@ -51,6 +55,8 @@ struct VisualOdometryConfig {
       "profile difference treated as noise (subtracted before scaling), so standstill gives 0");
     v("normalise_profile_brightness", normalise_profile_brightness,
       "match the exposure gain of the compared profiles so brightness changes do not read as speed");
+    v("turn_in_place_vrot_radps", turn_in_place_vrot_radps,
+      "rotation rate at or above which speed is 0 (robots that turn on the spot); 0 = off");
   }
 
   void Validate() const {
@@ -69,6 +75,7 @@ struct VisualOdometryConfig {
     Require(max_shift_px >= 0, "max_shift_px", "must be >= 0");
     Require(min_overlap_px >= 1, "min_overlap_px", "must be >= 1");
     Require(vtrans_noise_floor >= 0, "vtrans_noise_floor", "must be >= 0");
+    Require(turn_in_place_vrot_radps >= 0, "turn_in_place_vrot_radps", "must be >= 0");
   }
 };
 

@@ -1,5 +1,7 @@
 #include "services/pose_cells/pose_cells_node.h"
 
+#include "services/pose_cells/pose_cell_action_message.h"
+
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -23,22 +25,6 @@ namespace {
 
 constexpr const char* kStateKind = "rslam.pose_cells.NodeState";
 constexpr uint32_t kStateVersion = 1;
-
-msg::ActionKind ToMessageKind(Action::Kind kind) {
-  switch (kind) {
-    case Action::Kind::kCreate: return msg::ActionKind::ACTION_CREATE;
-    case Action::Kind::kLink: return msg::ActionKind::ACTION_LINK;
-    case Action::Kind::kSet: return msg::ActionKind::ACTION_SET;
-    case Action::Kind::kNone: break;
-  }
-  return msg::ActionKind::ACTION_NONE;
-}
-
-// The view's orientation offset travels with the action once the IDL carries it.
-template <class A>
-void SetRelativeAngle(A& out, double angle_rad) {
-  if constexpr (requires { out.relative_angle_rad; }) out.relative_angle_rad = angle_rad;
-}
 
 }  // namespace
 
@@ -190,20 +176,8 @@ class PoseCellsNode::Processor {
       context_.Reject("frame", e.what());
       return;
     }
-    msg::PoseCellAction out;
+    msg::PoseCellAction out = ToActionMessage(action, next_action_seq_++, vtrans, vrot, dt);
     out.header = header;
-    out.action_seq = next_action_seq_++;
-    out.kind = ToMessageKind(action.kind);
-    out.experience_id = action.experience_id;
-    out.from_experience_id = action.from_experience_id;
-    out.template_id = action.template_id;
-    out.pc_x = static_cast<float>(action.pc_x);
-    out.pc_y = static_cast<float>(action.pc_y);
-    out.pc_th = static_cast<float>(action.pc_th);
-    out.vtrans_mps = vtrans;
-    out.vrot_radps = vrot;
-    out.dt_s = dt;
-    SetRelativeAngle(out, action.relative_angle_rad);
     if (frame.velocity) mean_vtrans_mps_ += 0.1 * (vtrans - mean_vtrans_mps_);
     has_last_frame_ = true;
     last_frame_seq_ = header.frame_seq;

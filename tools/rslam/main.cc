@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "tools/demo/demo_command.h"
 #include "tools/eval/eval_command.h"
 #include "tools/launch/launch_command.h"
 #include "tools/record/record_command.h"
@@ -10,6 +11,7 @@
 int main(int argc, char** argv) {
   CLI::App app{"rslam: vision-only SLAM (RatSLAM) and camera-based occupancy mapping as DDS services", "rslam"};
   app.require_subcommand(1);
+  rslam::demo::RegisterDemoCommand(app);
   rslam::launch::RegisterLaunchCommand(app);
   rslam::launch::RegisterStatusCommand(app);
   rslam::launch::RegisterPingCommand(app);

@@ -1,5 +1,7 @@
 #include "tools/run/ratslam_runner.h"
 
+#include "services/experience_map/experience_action_message.h"
+#include "services/pose_cells/pose_cell_action_message.h"
 #include "tools/run/service_messages.h"
 
 #include <opencv2/imgproc.hpp>
@@ -130,7 +132,7 @@ uint32_t RatSlamRunner::LearnTemplate(const cv::Mat& image) { return templates_.
 void RatSlamRunner::ApplyToMap(const pose_cells::Action& action, double vtrans, double vrot, double dt_s) {
   // The action as the experience-map service receives it; a message it would refuse (dt beyond
   // its max_dt_s) keeps its place in the sequence but nothing of it is applied.
-  const msg::PoseCellAction message = PoseCellActionMessage(action, next_action_seq_++, vtrans, vrot, dt_s);
+  const msg::PoseCellAction message = pose_cells::ToActionMessage(action, next_action_seq_++, vtrans, vrot, dt_s);
   if (message.dt_s > config_.experience_map.max_dt_s) {
     ++refused_actions_;
     return;
@@ -138,7 +140,7 @@ void RatSlamRunner::ApplyToMap(const pose_cells::Action& action, double vtrans, 
   map_.Integrate(message.vtrans_mps, message.vrot_radps, message.dt_s);
   const size_t links_before = map_.links().size();
   try {
-    map_.Apply(ExperienceActionFromMessage(message));
+    map_.Apply(experience_map::FromActionMessage(message));
   } catch (const std::invalid_argument&) {
     ++refused_actions_;
     map_.Apply(experience_map::ExperienceAction{});  // the frame's correction budget is still spent

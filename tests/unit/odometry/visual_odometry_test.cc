@@ -167,6 +167,28 @@ TEST(VisualOdometryTest, ForwardMotionGivesClampedPositiveSpeed) {
   EXPECT_NEAR(v.vtrans, std::min((v.speed_difference - c.vtrans_noise_floor) * c.vtrans_scaling, c.vtrans_max), 1e-9);
 }
 
+TEST(VisualOdometryTest, TurningOnTheSpotReadsAsNoForwardMotionWhenConfigured) {
+  // A turn whose view also changes (noise stands in for perspective) reads as some speed...
+  const cv::Mat wide = Texture(760, 480, 4);
+  const cv::Mat before = View(wide, 60, 640);
+  const cv::Mat after = AddNoise(View(wide, 40, 640), 12.0, 5);
+  VisualOdometry plain(VisualOdometryConfig{});
+  plain.Update(before, kDt);
+  const Velocity turning = plain.Update(after, kDt);
+  ASSERT_EQ(turning.rotation_shift_px, 20);
+  ASSERT_GT(turning.vtrans, 0.0);
+  // ... which a turn-in-place robot's config removes at or above the threshold, and only there.
+  VisualOdometryConfig config;
+  config.turn_in_place_vrot_radps = std::abs(turning.vrot);
+  VisualOdometry robot(config);
+  robot.Update(before, kDt);
+  EXPECT_EQ(robot.Update(after, kDt).vtrans, 0.0);
+  config.turn_in_place_vrot_radps = std::abs(turning.vrot) * 1.01;
+  VisualOdometry below(config);
+  below.Update(before, kDt);
+  EXPECT_DOUBLE_EQ(below.Update(after, kDt).vtrans, turning.vtrans);
+}
+
 TEST(VisualOdometryTest, RejectsBadImagesAndDt) {
   VisualOdometry vo(VisualOdometryConfig{});
   EXPECT_THROW(vo.Update(cv::Mat(), kDt), std::invalid_argument);

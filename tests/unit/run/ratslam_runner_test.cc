@@ -9,6 +9,8 @@
 #include <stdexcept>
 
 #include "synthetic_loop.h"
+#include "services/experience_map/experience_action_message.h"
+#include "services/pose_cells/pose_cell_action_message.h"
 #include "tools/run/service_messages.h"
 
 namespace rslam::run {
@@ -179,12 +181,12 @@ TEST(ServiceMessages, ActionsTravelAsTheServicesSendThem) {
   action.pc_y = 20.5;
   action.pc_th = 35.1;
   action.relative_angle_rad = 0.25;
-  const msg::PoseCellAction message = PoseCellActionMessage(action, 41, 1.5, -0.2, 0.1);
+  const msg::PoseCellAction message = pose_cells::ToActionMessage(action, 41, 1.5, -0.2, 0.1);
   EXPECT_EQ(message.kind, msg::ActionKind::ACTION_LINK);
   EXPECT_EQ(message.action_seq, 41u);
   EXPECT_EQ(message.vtrans_mps, 1.5);
   EXPECT_EQ(message.dt_s, 0.1);
-  const experience_map::ExperienceAction applied = ExperienceActionFromMessage(message);
+  const experience_map::ExperienceAction applied = experience_map::FromActionMessage(message);
   EXPECT_EQ(applied.kind, experience_map::ExperienceAction::Kind::kLink);
   EXPECT_EQ(applied.experience_id, 3u);
   EXPECT_EQ(applied.from_experience_id, 9u);
