@@ -4,8 +4,10 @@
 #include <string>
 
 #include "common/config/config_loader.h"
+#include "services/odometry/odometry_node_config.h"
 #include "services/odometry/visual_odometry.h"
 #include "services/templates/template_library.h"
+#include "services/templates/templates_node_config.h"
 
 namespace rslam {
 namespace {
@@ -17,12 +19,13 @@ TEST_P(PresetTest, OdometryAndTemplatesSectionsValidate) {
   const YAML::Node root = LoadYamlFile(path);
   ASSERT_TRUE(root["odometry"]) << path;
   ASSERT_TRUE(root["templates"]) << path;
-  odometry::VisualOdometryConfig odometry_config;
-  templates::TemplateConfig template_config;
+  // A preset section is a service's config: the library's keys plus the service's own.
+  odometry::OdometryNodeConfig odometry_config;
+  templates::TemplatesNodeConfig template_config;
   EXPECT_NO_THROW(LoadConfigSection(root, "odometry", odometry_config));
   EXPECT_NO_THROW(LoadConfigSection(root, "templates", template_config));
-  EXPECT_NO_THROW(odometry::VisualOdometry{odometry_config});
-  EXPECT_NO_THROW(templates::TemplateLibrary{template_config});
+  EXPECT_NO_THROW(odometry::VisualOdometry{odometry_config.visual});
+  EXPECT_NO_THROW(templates::TemplateLibrary{template_config.library});
 }
 
 INSTANTIATE_TEST_SUITE_P(Presets, PresetTest, ::testing::Values("stlucia", "irat", "oxford", "nordland"));
@@ -36,10 +39,10 @@ TEST(PresetFileTest, StLuciaPresetHoldsOpenRatSlamValues) {
   EXPECT_EQ(t.template_x_size, 60);
   EXPECT_EQ(t.template_y_size, 10);
   EXPECT_DOUBLE_EQ(t.match_threshold, 0.085);
-  odometry::VisualOdometryConfig o;
+  odometry::OdometryNodeConfig o;
   LoadConfigSection(root, "odometry", o);
-  EXPECT_EQ(o.vrot_image_y_min, 75);
-  EXPECT_DOUBLE_EQ(o.vtrans_scaling, 1000);
+  EXPECT_EQ(o.visual.vrot_image_y_min, 75);
+  EXPECT_DOUBLE_EQ(o.visual.vtrans_scaling, 1000);
 }
 
 TEST(PresetFileTest, UnknownKeyIsAnErrorNamingIt) {
