@@ -76,6 +76,7 @@ json ToJson(const msg::PoseCellAction& m) {
           {"experience_id", m.experience_id},
           {"from_experience_id", m.from_experience_id},
           {"template_id", m.template_id},
+          {"relative_angle_rad", m.relative_angle_rad},
           {"pc_x", static_cast<double>(m.pc_x)},
           {"pc_y", static_cast<double>(m.pc_y)},
           {"pc_th", static_cast<double>(m.pc_th)},
