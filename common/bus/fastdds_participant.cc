@@ -324,6 +324,13 @@ class FastDdsParticipant final : public Participant {
     if (subscriber == nullptr) throw BusError("Fast DDS: cannot create subscriber for " + spec.topic);
     dds::DataReaderQos rqos;
     ApplyCommonQos(rqos, SettingsOf(spec.qos));
+    if (SettingsOf(spec.qos).keep_all) {
+      // A keep-all reader whose history is full rejects samples, and Fast DDS 2.9 then stalls
+      // the stream (seen: 9,301 of 10,000 to a slow reader). Let the writer's bounded history be
+      // the back-pressure instead; reader memory grows only as samples wait.
+      rqos.resource_limits().max_samples_per_instance = 100'000;
+      rqos.resource_limits().max_samples = 64 * 100'000;
+    }
     rqos.data_sharing().off();
     rqos.type_consistency().representation.m_value = {dds::XCDR_DATA_REPRESENTATION};
     auto reader = std::make_unique<FastDdsReader>();
