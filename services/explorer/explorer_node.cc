@@ -64,16 +64,6 @@ bool SameStatus(const msg::ExplorerStatus& a, const msg::ExplorerStatus& b) {
          a.commands_sent == b.commands_sent && a.goals_set_aside == b.goals_set_aside && a.reason == b.reason;
 }
 
-// Runs a subscriber callback; an exception (a bus write that stayed blocked, a bug) is logged
-// instead of ending the process from the subscriber's thread.
-template <class F>
-void Guarded(const char* input, F&& handle) {
-  try {
-    handle();
-  } catch (const std::exception& e) {
-    spdlog::error("while handling {}: {}", input, e.what());
-  }
-}
 
 }  // namespace
 
@@ -94,13 +84,13 @@ class ExplorerNode::Controller {
     ServiceContext& ctx = self->context_;
     std::vector<std::shared_ptr<void>> subscriptions;
     subscriptions.push_back(ctx.Subscribe<msg::OccupancyGrid>(bus::topics::kOccupancyGrid, [self](const msg::OccupancyGrid& m) {
-      Guarded("grid", [&] { self->OnGrid(m); });
+      self->OnGrid(m);
     }));
     subscriptions.push_back(ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose, [self](const msg::ExperiencePose& m) {
-      Guarded("pose", [&] { self->OnPose(m); });
+      self->OnPose(m);
     }));
     subscriptions.push_back(ctx.Subscribe<msg::MotionFeedback>(bus::topics::kMotionFeedback, [self](const msg::MotionFeedback& m) {
-      Guarded("feedback", [&] { self->OnFeedback(m); });
+      self->OnFeedback(m);
     }));
     return subscriptions;
   }

@@ -69,16 +69,6 @@ msg::ObstacleProfile ToMessage(const msg::Header& header, const AnchoredProfile&
   return out;
 }
 
-// Runs a subscriber callback; an exception (a bus write that stayed blocked, a bug) is logged
-// instead of ending the process from the subscriber's thread.
-template <class F>
-void Guarded(const char* input, F&& handle) {
-  try {
-    handle();
-  } catch (const std::exception& e) {
-    spdlog::error("while handling {}: {}", input, e.what());
-  }
-}
 
 }  // namespace
 
@@ -108,12 +98,12 @@ class OccupancyNode::Mapper {
     ServiceContext& ctx = self->context_;
     std::vector<std::shared_ptr<void>> subscriptions;
     subscriptions.push_back(ctx.Subscribe<msg::Image>(bus::topics::kCameraImage,
-                              [self](const msg::Image& m) { Guarded("image", [&] { self->OnImage(m); }); }));
+                              [self](const msg::Image& m) { self->OnImage(m); }));
     subscriptions.push_back(ctx.Subscribe<msg::ExperiencePose>(bus::topics::kExperienceMapPose, [self](const msg::ExperiencePose& m) {
-      Guarded("pose", [&] { self->OnPose(m); });
+      self->OnPose(m);
     }));
     subscriptions.push_back(ctx.Subscribe<msg::ExperienceMap>(bus::topics::kExperienceMapMap, [self](const msg::ExperienceMap& m) {
-      Guarded("map", [&] { self->OnMap(m); });
+      self->OnMap(m);
     }));
     return subscriptions;
   }
