@@ -21,7 +21,8 @@ inline constexpr int32_t kUnreachable = std::numeric_limits<int32_t>::max();
 
 // traversable[i] != 0: the wave may enter cell i; goal[i] != 0: cell i is a source (cost 0).
 // Returns the cost per cell (kUnreachable where no goal can be reached). Throws
-// std::invalid_argument if the spans do not hold width x height cells.
+// std::invalid_argument if the spans do not hold width x height cells, or if the grid is too large
+// for 32-bit costs (more than about 150 million cells).
 std::vector<int32_t> ComputeExplorationTransform(int width, int height,
                                                  std::span<const uint8_t> traversable,
                                                  std::span<const uint8_t> goal);

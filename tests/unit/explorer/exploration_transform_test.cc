@@ -50,6 +50,39 @@ TEST(ExplorationTransformTest, EqualsBruteForceShortestPathsOnRandomGrids) {
   }
 }
 
+TEST(ExplorationTransformTest, EqualsBruteForceFromOpenToNearlyBlockedGrids) {
+  // Obstacle densities from none to mostly blocked exercise every corner-cutting case of the
+  // diagonal step; some goals are also marked traversable (the goal wins: cost 0).
+  std::mt19937 rng(7);
+  const double densities[] = {0.0, 0.1, 0.45, 0.7};
+  for (double density : densities)
+    for (int trial = 0; trial < 5; ++trial) {
+      const int w = 3 + trial * 9, h = 30 - trial * 6;
+      std::vector<uint8_t> trav(w * h), goal(w * h);
+      std::bernoulli_distribution blocked(density), is_goal(0.02), also_traversable(0.5);
+      for (int i = 0; i < w * h; ++i) {
+        goal[i] = is_goal(rng);
+        trav[i] = !blocked(rng) && (!goal[i] || also_traversable(rng));
+      }
+      EXPECT_EQ(ComputeExplorationTransform(w, h, trav, goal), BruteForce(w, h, trav, goal))
+          << "density " << density << " trial " << trial;
+    }
+}
+
+TEST(ExplorationTransformTest, FollowsAWindingCorridorToTheEnd) {
+  // Walls on every other row with the gap alternating between the ends: one corridor that winds
+  // back and forth, so the costs grow far beyond one crossing of the grid.
+  const int w = 21, h = 21;
+  std::vector<uint8_t> trav(w * h, 1), goal(w * h, 0);
+  for (int y = 1; y < h; y += 2)
+    for (int x = 0; x < w; ++x) trav[y * w + x] = x == ((y / 2) % 2 == 0 ? w - 1 : 0);
+  goal[0] = 1;
+  trav[0] = 0;
+  const auto cost = ComputeExplorationTransform(w, h, trav, goal);
+  EXPECT_EQ(cost, BruteForce(w, h, trav, goal));
+  EXPECT_GT(cost[(h - 1) * w + (w - 1)], 10 * w * (h / 2));
+}
+
 TEST(ExplorationTransformTest, RoutesAroundAWallInsteadOfThroughIt) {
   // 9 x 5, goal at (8, 2), a wall at x = 4 except the gap at y = 4.
   const int w = 9, h = 5;
@@ -73,6 +106,12 @@ TEST(ExplorationTransformTest, RejectsMismatchedMasks) {
   std::vector<uint8_t> trav(12, 1), goal(11, 0);
   EXPECT_THROW(ComputeExplorationTransform(4, 3, trav, goal), std::invalid_argument);
   EXPECT_THROW(ComputeExplorationTransform(0, 3, {}, {}), std::invalid_argument);
+}
+
+TEST(ExplorationTransformTest, RejectsGridsTooLargeFor32BitCosts) {
+  // 20000 x 20000 cells: the longest path could cost more than an int32 holds. Refused before the
+  // masks are looked at, so empty spans suffice here.
+  EXPECT_THROW(ComputeExplorationTransform(20000, 20000, {}, {}), std::invalid_argument);
 }
 
 }  // namespace
