@@ -9,9 +9,6 @@
 
 #include "services/templates/jeffrey_divergence.h"
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 namespace rslam::templates {
 
@@ -22,37 +19,6 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // OpenRatSLAM's slack on the mean prefilter: template means are of the whole template, the
 // comparison is over a shifted window, so the gap is only approximately a lower bound.
 constexpr double kMeanPrefilterSlack = 0.005;
-
-// Sum of |a[i] - b[i]| over n bytes.
-inline uint32_t RowSad(const uint8_t* a, const uint8_t* b, int n) {
-  int i = 0;
-  uint32_t sum = 0;
-#if defined(__SSE2__)
-  __m128i acc = _mm_setzero_si128();
-  for (; i + 16 <= n; i += 16) {
-    const __m128i va = _mm_loadu_si128(reinterpret_cast<const __m128i*>(a + i));
-    const __m128i vb = _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + i));
-    acc = _mm_add_epi64(acc, _mm_sad_epu8(va, vb));
-  }
-  if (i < n && n >= 16) {
-    // The tail as one more 16-byte load ending at n, with the lanes already counted masked to 0.
-    alignas(16) static constexpr uint8_t kLanes[32] = {0,    0,    0,    0,    0,    0,    0,    0,
-                                                       0,    0,    0,    0,    0,    0,    0,    0,
-                                                       0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,
-                                                       0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff};
-    const int tail = n - i;  // 1..15 new lanes at the top of the load
-    const __m128i mask = _mm_loadu_si128(reinterpret_cast<const __m128i*>(kLanes + tail));
-    const __m128i va = _mm_and_si128(mask, _mm_loadu_si128(reinterpret_cast<const __m128i*>(a + n - 16)));
-    const __m128i vb = _mm_and_si128(mask, _mm_loadu_si128(reinterpret_cast<const __m128i*>(b + n - 16)));
-    acc = _mm_add_epi64(acc, _mm_sad_epu8(va, vb));
-    i = n;
-  }
-  sum = static_cast<uint32_t>(_mm_cvtsi128_si32(acc)) +
-        static_cast<uint32_t>(_mm_cvtsi128_si32(_mm_srli_si128(acc, 8)));
-#endif
-  for (; i < n; ++i) sum += static_cast<uint32_t>(std::abs(int(a[i]) - int(b[i])));
-  return sum;
-}
 
 double WrapAngle(double a) {
   a = std::fmod(a, 2.0 * std::numbers::pi);
@@ -117,6 +83,13 @@ std::vector<uint8_t> TemplateLibrary::MakeDeadColumns(const TemplateConfig& conf
   return dead;
 }
 
+bool TemplateLibrary::WindowsShareTemplateColumns(const std::vector<ShiftWindow>& windows) {
+  for (const ShiftWindow& w : windows) {
+    if (w.template_x0 != windows.front().template_x0 || w.length != windows.front().length) return false;
+  }
+  return !windows.empty();
+}
+
 TemplateLibrary::TemplateLibrary(TemplateConfig config)
     : config_(Validated(std::move(config))),
       encoder_(config_),
@@ -125,7 +98,13 @@ TemplateLibrary::TemplateLibrary(TemplateConfig config)
       height_(encoder_.height()),
       template_size_(width_ * height_),
       windows_(MakeShiftWindows(config_, width_, height_)),
-      dead_column_(MakeDeadColumns(config_, width_)) {}
+      dead_column_(MakeDeadColumns(config_, width_)),
+      packed_windows_(WindowsShareTemplateColumns(windows_)),
+      match_x0_(packed_windows_ ? windows_.front().template_x0 : 0),
+      match_row_stride_(histogram_mode_ ? 0 : packed_windows_ ? (windows_.front().length + 31) / 32 * 32 : width_),
+      window_sad_(BestWindowSad()),
+      shifted_windows_sad_(BestShiftedWindowsSad()),
+      match_pixels_(histogram_mode_ ? 0 : kWindowSadPadding, 0) {}
 
 namespace {
 
@@ -152,58 +131,99 @@ uint32_t TemplateLibrary::Store(const EncodedView& view) {
   } else {
     column_prefix_.resize(column_prefix_.size() + width_ + 1);
     ColumnPrefix(view.pixels.data(), width_, height_, width_, column_prefix_.data() + column_prefix_.size() - (width_ + 1));
+    AppendMatchRows(view.pixels.data());
   }
   return id;
 }
 
+void TemplateLibrary::AppendMatchRows(const uint8_t* pixels) {
+  // The zero padding at the end becomes the new template's first row; new padding follows it.
+  const std::size_t start = match_pixels_.size() - kWindowSadPadding;
+  const std::size_t template_bytes = static_cast<std::size_t>(height_) * match_row_stride_;
+  match_pixels_.resize(start + template_bytes + kWindowSadPadding, 0);
+  const int copied = packed_windows_ ? windows_.front().length : width_;
+  for (int y = 0; y < height_; ++y) {
+    std::copy_n(pixels + static_cast<std::size_t>(y) * width_ + match_x0_, copied,
+                match_pixels_.data() + start + static_cast<std::size_t>(y) * match_row_stride_);
+  }
+}
+
 void TemplateLibrary::PrepareView(const EncodedView& view, PreparedView& prepared) const {
   prepared.mean = view.mean;
-  if (config_.panoramic) {
-    prepared.doubled_rows.resize(static_cast<std::size_t>(template_size_) * 2);
-    for (int y = 0; y < height_; ++y) {
-      const uint8_t* row = view.pixels.data() + static_cast<std::size_t>(y) * width_;
-      uint8_t* out = prepared.doubled_rows.data() + static_cast<std::size_t>(y) * 2 * width_;
-      std::copy_n(row, width_, out);
-      std::copy_n(row, width_, out + width_);
-    }
-    prepared.rows = prepared.doubled_rows.data();
-    prepared.stride = 2 * width_;
-  } else {
-    prepared.rows = view.pixels.data();
-    prepared.stride = width_;
+  prepared.stride = config_.panoramic ? 2 * width_ : width_;
+  prepared.rows_buffer.assign(static_cast<std::size_t>(prepared.stride) * height_ + kWindowSadPadding, 0);
+  for (int y = 0; y < height_; ++y) {
+    const uint8_t* row = view.pixels.data() + static_cast<std::size_t>(y) * width_;
+    uint8_t* out = prepared.rows_buffer.data() + static_cast<std::size_t>(y) * prepared.stride;
+    std::copy_n(row, width_, out);
+    if (config_.panoramic) std::copy_n(row, width_, out + width_);
   }
+  prepared.rows = prepared.rows_buffer.data();
   prepared.column_prefix.resize(prepared.stride + 1);
   ColumnPrefix(prepared.rows, prepared.stride, height_, prepared.stride, prepared.column_prefix.data());
+  if (packed_windows_) {
+    prepared.window_offsets.clear();
+    prepared.window_sums.clear();
+    for (const ShiftWindow& w : windows_) {
+      prepared.window_offsets.push_back(w.view_x0);
+      prepared.window_sums.push_back(prepared.column_prefix[w.view_x0 + w.length] - prepared.column_prefix[w.view_x0]);
+    }
+    ShiftedWindows& set = prepared.windows;
+    set.view = prepared.rows;
+    set.view_stride = prepared.stride;
+    set.view_offsets = prepared.window_offsets.data();
+    set.view_sums = prepared.window_sums.data();
+    set.count = static_cast<int>(windows_.size());
+    set.length = windows_.front().length;
+    set.rows = height_;
+    set.template_stride = match_row_stride_;
+  }
 }
+
+namespace {
+
+// The largest SAD whose difference (sad / sad_per_difference) can be within `bound`, generous by
+// a relative 1e-12 so that a SAD whose difference ties the bound (computed in double) is never
+// abandoned: ties are decided by the caller.
+uint64_t SadLimit(double bound, double sad_per_difference) {
+  const double cap = bound * sad_per_difference * (1.0 + 1e-12);
+  return cap >= 4e18 ? std::numeric_limits<uint64_t>::max() : static_cast<uint64_t>(cap);
+}
+
+}  // namespace
 
 double TemplateLibrary::TemplateDifference(const PreparedView& view, uint32_t id, double bound, int& best_shift,
                                            double* lower_bound) const {
-  const uint8_t* tmpl = pixels_.data() + static_cast<std::size_t>(id) * template_size_;
+  const uint8_t* tmpl = match_pixels_.data() + static_cast<std::size_t>(id) * height_ * match_row_stride_;
   const uint32_t* tmpl_prefix = column_prefix_.data() + static_cast<std::size_t>(id) * (width_ + 1);
+  if (packed_windows_) {
+    // Every shift compares the same template columns: one call scans them all.
+    const ShiftWindow& w0 = windows_.front();
+    const uint32_t template_sum = tmpl_prefix[w0.template_x0 + w0.length] - tmpl_prefix[w0.template_x0];
+    const ShiftedWindowsResult r =
+        shifted_windows_sad_(view.windows, tmpl, template_sum, SadLimit(bound, w0.sad_per_difference));
+    if (lower_bound) {
+      *lower_bound = std::min(*lower_bound, static_cast<double>(r.smallest_seen) / w0.sad_per_difference);
+    }
+    if (r.best_window < 0) return kInfinity;
+    best_shift = windows_[r.best_window].shift;
+    return static_cast<double>(r.best_sad) / w0.sad_per_difference;
+  }
   double best = kInfinity;
   double smallest_seen = kInfinity;
   for (const ShiftWindow& w : windows_) {
-    const double cap = std::min(best, bound) * w.sad_per_difference;
-    const uint64_t limit = cap >= 4e18 ? std::numeric_limits<uint64_t>::max() : static_cast<uint64_t>(cap);
+    const uint64_t limit = SadLimit(std::min(best, bound), w.sad_per_difference);
     // Lower bound first: |sum(a) - sum(b)| <= sum |a - b|.
     const int64_t window_gap =
         static_cast<int64_t>(tmpl_prefix[w.template_x0 + w.length] - tmpl_prefix[w.template_x0]) -
         static_cast<int64_t>(view.column_prefix[w.view_x0 + w.length] - view.column_prefix[w.view_x0]);
     uint64_t sad = static_cast<uint64_t>(window_gap < 0 ? -window_gap : window_gap);
-    bool abandoned = sad > limit;
-    if (!abandoned) {
-      sad = 0;
-      const uint8_t* t = tmpl + w.template_x0;
-      const uint8_t* v = view.rows + w.view_x0;
-      for (int y = 0; y < height_; ++y, t += width_, v += view.stride) {
-        sad += RowSad(t, v, w.length);
-        if (sad > limit) {
-          abandoned = true;
-          break;
-        }
-      }
+    if (sad <= limit) {
+      sad = window_sad_(tmpl + (w.template_x0 - match_x0_), match_row_stride_, view.rows + w.view_x0, view.stride,
+                        w.length, height_, limit);
     }
-    // Abandoned, the full difference is at least the partial one: still a lower bound.
+    // Abandoned (sad > limit), the full difference is at least the partial one: still a lower bound.
+    const bool abandoned = sad > limit;
     const double difference = static_cast<double>(sad) / w.sad_per_difference;
     smallest_seen = std::min(smallest_seen, difference);
     if (!abandoned && difference < best) {
@@ -222,23 +242,37 @@ TemplateLibrary::Best TemplateLibrary::BestGridMatch(const PreparedView& view, b
   best.difference = config_.match_threshold;
   double smallest_lower_bound = kInfinity;
   const double gap_limit = config_.match_threshold + kMeanPrefilterSlack;
-  const auto count = static_cast<uint32_t>(size());
-  for (uint32_t id = 0; id < count; ++id) {
+  auto consider = [&](uint32_t id) {
     if (prefilter) {
       const double gap = std::abs(static_cast<double>(view.mean) - means_[id]);
       if (gap > gap_limit) {
         smallest_lower_bound = std::min(smallest_lower_bound, gap);
-        continue;
+        return;
       }
     }
     int shift = 0;
     double lower_bound = kInfinity;
     const double difference = TemplateDifference(view, id, best.difference, shift, &lower_bound);
-    if (difference <= best.difference && (!best.found || difference < best.difference)) {
-      best = {id, shift, difference, true};
-    }
+    // The lowest difference wins, then the lowest id: the same template whatever the order.
+    const bool better = best.found ? difference < best.difference || (difference == best.difference && id < best.id)
+                                   : difference <= best.difference;
+    if (better) best = {id, shift, difference, true};
     smallest_lower_bound = std::min(smallest_lower_bound, lower_bound);
+  };
+  // The hinted template and its neighbours first (on a route the view usually matches one of
+  // them, and the bound drops to its difference), then everything else in id order.
+  const auto count = static_cast<uint32_t>(size());
+  const uint32_t hint = std::min(search_hint_, count - 1);
+  constexpr uint32_t kHintReach = 2;
+  const uint32_t first = hint >= kHintReach ? hint - kHintReach : 0;
+  const uint32_t end = std::min(count, hint + kHintReach + 1);
+  consider(hint);
+  for (uint32_t step = 1; step <= kHintReach; ++step) {
+    if (hint + step < end) consider(hint + step);
+    if (hint >= first + step) consider(hint - step);
   }
+  for (uint32_t id = 0; id < first; ++id) consider(id);
+  for (uint32_t id = end; id < count; ++id) consider(id);
   if (!best.found) best.difference = smallest_lower_bound;
   return best;
 }
@@ -315,9 +349,11 @@ ViewMatch TemplateLibrary::MatchOrLearn(const cv::Mat& grey) {
   PrepareView(scratch_, scratch_prepared_);
   const Best best = BestGridMatch(scratch_prepared_, config_.mean_prefilter);
   if (best.found && best.difference <= config_.match_threshold) {
+    search_hint_ = best.id;
     return {best.id, false, ShiftToAngle(best.shift), best.difference};
   }
-  return {Store(scratch_), true, 0.0, best.difference};
+  search_hint_ = Store(scratch_);
+  return {search_hint_, true, 0.0, best.difference};
 }
 
 uint32_t TemplateLibrary::Learn(const cv::Mat& grey) {

@@ -27,12 +27,17 @@
 // histogram: shift * 360 deg / width, wrapped to (-pi, pi]. In histogram mode the shift is the
 // rotation index r (0..35) of paper 001, recoverable as round(angle / 10 deg) mod 36.
 //
-// Speed: templates live in one contiguous 8-bit buffer; matching uses SSE2 sums of absolute
-// differences and abandons a template as soon as its partial sum exceeds min(match_threshold,
-// best so far); MatchOrLearn (patch, column) also skips templates whose precomputed mean differs
-// from the view's by more than match_threshold + 0.005 (OpenRatSLAM's prefilter). So a matched
-// view's difference is exact, but a new view's `difference` is only a lower bound (> threshold
-// in practice) of its best difference. Differences() is always exact and exhaustive.
+// Speed: templates live in one contiguous 8-bit buffer, each row holding just the columns every
+// shift compares (patch, panoramic), zero-padded to whole SIMD vectors; sums of absolute
+// differences use SSE2 or, when the CPU has it, AVX2 (window_sad.h). A template is abandoned as
+// soon as its partial sum exceeds min(match_threshold, best so far), and a shift is skipped when
+// the difference of its window sums already does. MatchOrLearn starts with the previous frame's
+// template and its neighbours (on a route the likely match, so the bound drops early); the
+// order never changes the result: the lowest difference wins, then the lowest id, then the
+// smallest |shift|. MatchOrLearn (patch, column) also skips templates whose precomputed mean
+// differs from the view's by more than match_threshold + 0.005 (OpenRatSLAM's prefilter). So a
+// matched view's difference is exact, but a new view's `difference` is only a lower bound
+// (> threshold in practice) of its best difference. Differences() is always exact and exhaustive.
 //
 // Deterministic; not thread-safe for concurrent mutation; bad images throw std::invalid_argument.
 
@@ -46,6 +51,7 @@
 #include "services/templates/proto/template_library.pb.h"
 #include "services/templates/template_config.h"
 #include "services/templates/view_encoding.h"
+#include "services/templates/window_sad.h"
 
 namespace rslam::templates {
 
@@ -90,13 +96,18 @@ class TemplateLibrary {
   };
 
   // The view laid out for shifted comparison (rows doubled when panoramic, so every wrapped
-  // shift is one contiguous run) with prefix sums of its column sums.
+  // shift is one contiguous run; kWindowSadPadding readable bytes past the end) with prefix sums
+  // of its column sums.
   struct PreparedView {
-    std::vector<uint8_t> doubled_rows;
+    std::vector<uint8_t> rows_buffer;
     std::vector<uint32_t> column_prefix;  // column_prefix[x] = sum of all pixels left of column x
     const uint8_t* rows = nullptr;
     int stride = 0;
     float mean = 0.0f;
+    // Packed windows: each shift's first view column and pixel sum, and the set scanned.
+    std::vector<int> window_offsets;
+    std::vector<uint32_t> window_sums;
+    ShiftedWindows windows;
   };
 
   uint32_t Store(const EncodedView& view);
@@ -126,10 +137,26 @@ class TemplateLibrary {
   };
   static std::vector<ShiftWindow> MakeShiftWindows(const TemplateConfig& config, int width, int height);
   static std::vector<uint8_t> MakeDeadColumns(const TemplateConfig& config, int width);
+  static bool WindowsShareTemplateColumns(const std::vector<ShiftWindow>& windows);
+  void AppendMatchRows(const uint8_t* pixels);
   const std::vector<ShiftWindow> windows_;  // one per shift tried, smallest |s| first (column, patch)
   const std::vector<uint8_t> dead_column_;  // histogram mode: 1 where the dead zone is
+  // Matching layout (column, patch): per template `height_` rows of match_row_stride_ bytes.
+  // When every shift compares the same template columns (patch, panoramic), a row holds only
+  // those columns, zero-padded to whole 32-byte vectors (match_x0_ = their first column);
+  // otherwise (column mode) it holds the whole template row and match_x0_ = 0.
+  const bool packed_windows_;
+  const int match_x0_;
+  const int match_row_stride_;
+  const WindowSadFunction window_sad_;
+  const ShiftedWindowsFunction shifted_windows_sad_;
 
-  std::vector<uint8_t> pixels_;             // size() * template_size_
+  std::vector<uint8_t> pixels_;             // size() * template_size_, as saved
+  std::vector<uint8_t> match_pixels_;       // size() * height_ * match_row_stride_ + kWindowSadPadding
+  // Where MatchOrLearn starts searching: the previous frame's template (then its neighbours),
+  // the likeliest match on a route. The order changes how soon the search bound tightens,
+  // never the result (ties go to the lowest id whatever the order).
+  uint32_t search_hint_ = 0;
   std::vector<float> means_;                // per template
   // Per template, prefix sums of its column sums (width + 1 each): the sum over any column
   // window in O(1), and |window sum difference| is a lower bound of the window's SAD, so most

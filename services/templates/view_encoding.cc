@@ -3,7 +3,6 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -28,61 +27,11 @@ std::string Describe(const TemplateConfig& c) {
   return os.str();
 }
 
-uint8_t Quantise(float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); }
-
-// For an axis of `source` pixels shrunk to `target` cells: each source pixel's first cell, and
-// how much of the pixel falls in it (the rest falls in the next cell).
-struct AxisWeights {
-  std::vector<int> cell;
-  std::vector<float> first_weight;
-};
-
-AxisWeights ComputeAxisWeights(int source, int target) {
-  AxisWeights w;
-  w.cell.resize(source);
-  w.first_weight.resize(source);
-  const double scale = static_cast<double>(source) / target;
-  for (int j = 0; j < source; ++j) {
-    const int cell = std::min(static_cast<int>(j / scale), target - 1);
-    const double boundary = (cell + 1) * scale;
-    w.cell[j] = cell;
-    w.first_weight[j] = cell + 1 < target && j + 1 > boundary ? static_cast<float>(boundary - j) : 1.0f;
-  }
-  return w;
-}
-
-// Area-weighted mean of each output cell (what cv::INTER_AREA computes), with intensities
-// scaled to [0, 1]. OpenCV's INTER_AREA takes a slow generic path for non-integer ratios
-// (560 -> 60 columns); this separable version costs a few microseconds.
-cv::Mat AreaShrink(const cv::Mat& source, int width, int height) {
-  const AxisWeights wx = ComputeAxisWeights(source.cols, width);
-  const AxisWeights wy = ComputeAxisWeights(source.rows, height);
-  std::vector<float> bands(static_cast<std::size_t>(height) * source.cols, 0.0f);
-  for (int y = 0; y < source.rows; ++y) {
-    const uint8_t* row = source.ptr<uint8_t>(y);
-    const float w_first = wy.first_weight[y];
-    float* first = bands.data() + static_cast<std::size_t>(wy.cell[y]) * source.cols;
-    for (int x = 0; x < source.cols; ++x) first[x] += w_first * static_cast<float>(row[x]);
-    if (w_first < 1.0f) {
-      const float w_second = 1.0f - w_first;
-      float* second = first + source.cols;
-      for (int x = 0; x < source.cols; ++x) second[x] += w_second * static_cast<float>(row[x]);
-    }
-  }
-  cv::Mat out(height, width, CV_32F, cv::Scalar(0));
-  const float norm = static_cast<float>(static_cast<double>(width) * height /
-                                        (static_cast<double>(source.cols) * source.rows * 255.0));
-  for (int b = 0; b < height; ++b) {
-    const float* band = bands.data() + static_cast<std::size_t>(b) * source.cols;
-    float* o = out.ptr<float>(b);
-    for (int x = 0; x < source.cols; ++x) {
-      const float w_first = wx.first_weight[x];
-      o[wx.cell[x]] += w_first * band[x];
-      if (w_first < 1.0f) o[wx.cell[x] + 1] += (1.0f - w_first) * band[x];
-    }
-    for (int x = 0; x < width; ++x) o[x] *= norm;
-  }
-  return out;
+// Rounds half away from zero, as std::lround, without the library call.
+uint8_t Quantise(float v) {
+  const float scaled = std::clamp(v, 0.0f, 1.0f) * 255.0f;
+  const int whole = static_cast<int>(scaled);
+  return static_cast<uint8_t>(scaled - static_cast<float>(whole) >= 0.5f ? whole + 1 : whole);
 }
 
 }  // namespace
@@ -93,7 +42,25 @@ ViewEncoder::ViewEncoder(const TemplateConfig& config)
       width_(histogram_mode_ ? config.rotation_image_width : config.template_x_size),
       height_(histogram_mode_ ? config.rotation_image_height : (config.mode == "column" ? 1 : config.template_y_size)),
       histogram_bins_(histogram_mode_ ? config.histogram_bins : 0),
-      description_(Describe(config)) {}
+      description_(Describe(config)),
+      fixed_shrink_(FixedShrink(config, width_, height_)) {}
+
+std::optional<AreaShrink> ViewEncoder::FixedShrink(const TemplateConfig& config, int width, int height) {
+  // Only a crop with explicit edges has a size that does not depend on the image.
+  if (config.image_crop_x_max == -1 || config.image_crop_y_max == -1) return std::nullopt;
+  const int crop_cols = config.image_crop_x_max - config.image_crop_x_min;
+  const int crop_rows = config.image_crop_y_max - config.image_crop_y_min;
+  if (crop_cols < width || crop_rows < height) return std::nullopt;  // Encode refuses every image
+  return AreaShrink(crop_cols, crop_rows, width, height);
+}
+
+void ViewEncoder::Shrink(const cv::Mat& crop, cv::Mat& out) const {
+  if (fixed_shrink_) {
+    fixed_shrink_->Apply(crop, out);
+  } else {
+    AreaShrink(crop.cols, crop.rows, width_, height_).Apply(crop, out);
+  }
+}
 
 cv::Rect ViewEncoder::ResolveCrop(const cv::Mat& grey) const {
   if (grey.empty()) throw std::invalid_argument("TemplateLibrary: empty image");
@@ -132,7 +99,8 @@ void ViewEncoder::Encode(const cv::Mat& grey, EncodedView& out) const {
 }
 
 void ViewEncoder::EncodeGrid(const cv::Mat& crop, EncodedView& out) const {
-  cv::Mat view = AreaShrink(crop, width_, height_);
+  cv::Mat view;
+  Shrink(crop, view);
   // OpenRatSLAM's vt_normalisation: a global gain so the mean is `normalisation`.
   if (config_.normalisation > 0) {
     const double mean = cv::mean(view)[0];
@@ -222,7 +190,8 @@ void ViewEncoder::EncodeHistogram(const cv::Mat& crop, EncodedView& out) const {
     out.histogram[b] = total ? static_cast<float>(counts[b]) / static_cast<float>(total) : 0.0f;
   }
 
-  const cv::Mat small = AreaShrink(panorama, width_, height_);
+  cv::Mat small;
+  Shrink(panorama, small);
   out.pixels.resize(static_cast<std::size_t>(width_) * height_);
   for (int y = 0; y < height_; ++y) {
     const float* row = small.ptr<float>(y);

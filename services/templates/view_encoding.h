@@ -12,9 +12,11 @@
 #include <opencv2/core.hpp>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "services/templates/area_shrink.h"
 #include "services/templates/template_config.h"
 
 namespace rslam::templates {
@@ -43,6 +45,8 @@ class ViewEncoder {
   cv::Rect ResolveCrop(const cv::Mat& grey) const;
   void EncodeGrid(const cv::Mat& crop, EncodedView& out) const;
   void EncodeHistogram(const cv::Mat& crop, EncodedView& out) const;
+  static std::optional<AreaShrink> FixedShrink(const TemplateConfig& config, int width, int height);
+  void Shrink(const cv::Mat& crop, cv::Mat& out) const;
 
   const TemplateConfig config_;
   const bool histogram_mode_;
@@ -50,6 +54,7 @@ class ViewEncoder {
   const int height_;
   const int histogram_bins_;
   const std::string description_;
+  const std::optional<AreaShrink> fixed_shrink_;  // when the crop's size is fixed by the config
 };
 
 }  // namespace rslam::templates
