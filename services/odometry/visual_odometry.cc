@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -16,48 +17,75 @@ namespace rslam::odometry {
 
 namespace {
 
-// Sum of a[n] (and of b[n]) over n < count.
-void Sums(const float* a, const float* b, int count, float& sum_a, float& sum_b) {
-  int n = 0;
-#if defined(__SSE2__)
-  __m128 va = _mm_setzero_ps(), vb = _mm_setzero_ps();
-  for (; n + 4 <= count; n += 4) {
-    va = _mm_add_ps(va, _mm_loadu_ps(a + n));
-    vb = _mm_add_ps(vb, _mm_loadu_ps(b + n));
-  }
-  alignas(16) float lanes_a[4], lanes_b[4];
-  _mm_store_ps(lanes_a, va);
-  _mm_store_ps(lanes_b, vb);
-  sum_a = (lanes_a[0] + lanes_a[1]) + (lanes_a[2] + lanes_a[3]);
-  sum_b = (lanes_b[0] + lanes_b[1]) + (lanes_b[2] + lanes_b[3]);
-#else
-  sum_a = sum_b = 0.0f;
-#endif
-  for (; n < count; ++n) {
-    sum_a += a[n];
-    sum_b += b[n];
-  }
+// prefix[i] = sum of p[n] for n < i, in double: the sum over any overlap in O(1), to well under
+// float precision.
+void PrefixSums(std::span<const float> p, std::vector<double>& prefix) {
+  prefix.resize(p.size() + 1);
+  prefix[0] = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) prefix[i + 1] = prefix[i] + p[i];
 }
 
-// Sum of |a[n] - gain * b[n]| over n < count. SIMD by hand: the compiler may not reorder a
-// floating-point reduction on its own.
-float AbsoluteDifferenceSum(const float* a, const float* b, float gain, int count) {
+// Sum of |a[n] - gain * b[n]| over n < count, in eight interleaved partial sums (two SSE2
+// registers; the same order in a plain build) combined at the end, so every build computes the
+// same float. Every 32 entries the running total is checked: once total / divisor > bound the
+// sum is abandoned and a partial total (already > bound * divisor) returned. The terms are never
+// negative, so the full sum is at least any partial total.
+float AbsoluteDifferenceSum(const float* a, const float* b, float gain, int count, double divisor, double bound) {
+  float lane[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+  auto combined = [&lane] { return ((lane[0] + lane[4]) + (lane[1] + lane[5])) + ((lane[2] + lane[6]) + (lane[3] + lane[7])); };
   int n = 0;
-  float sum = 0.0f;
 #if defined(__SSE2__)
   const __m128 sign = _mm_set1_ps(-0.0f);
   const __m128 g = _mm_set1_ps(gain);
-  __m128 acc = _mm_setzero_ps();
-  for (; n + 4 <= count; n += 4) {
-    const __m128 d = _mm_sub_ps(_mm_loadu_ps(a + n), _mm_mul_ps(g, _mm_loadu_ps(b + n)));
-    acc = _mm_add_ps(acc, _mm_andnot_ps(sign, d));
+  __m128 low = _mm_setzero_ps();
+  __m128 high = _mm_setzero_ps();
+  while (n + 8 <= count) {
+    const int stop = std::min(count - 7, n + 32);
+    for (; n < stop; n += 8) {
+      const __m128 d0 = _mm_sub_ps(_mm_loadu_ps(a + n), _mm_mul_ps(g, _mm_loadu_ps(b + n)));
+      const __m128 d1 = _mm_sub_ps(_mm_loadu_ps(a + n + 4), _mm_mul_ps(g, _mm_loadu_ps(b + n + 4)));
+      low = _mm_add_ps(low, _mm_andnot_ps(sign, d0));
+      high = _mm_add_ps(high, _mm_andnot_ps(sign, d1));
+    }
+    _mm_storeu_ps(lane, low);
+    _mm_storeu_ps(lane + 4, high);
+    const float total = combined();
+    if (static_cast<double>(total) / divisor > bound) return total;
   }
-  alignas(16) float lanes[4];
-  _mm_store_ps(lanes, acc);
-  sum = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
+#else
+  while (n + 8 <= count) {
+    const int stop = std::min(count - 7, n + 32);
+    for (; n < stop; n += 8) {
+      for (int k = 0; k < 8; ++k) lane[k] += std::abs(a[n + k] - gain * b[n + k]);
+    }
+    const float total = combined();
+    if (static_cast<double>(total) / divisor > bound) return total;
+  }
 #endif
+  float sum = combined();
   for (; n < count; ++n) sum += std::abs(a[n] - gain * b[n]);
   return sum;
+}
+
+// f(shift) of eq. 4 (see ShiftedProfileDifference) from the profiles and their prefix sums, or
+// some value > bound once it is certain to exceed bound.
+double DifferenceAt(std::span<const float> current, std::span<const float> previous, const std::vector<double>& prefix_current,
+                    const std::vector<double>& prefix_previous, int shift, bool match_gain,
+                    double bound = std::numeric_limits<double>::infinity()) {
+  const int w = static_cast<int>(current.size());
+  const int overlap = w - std::abs(shift);
+  const int start_a = std::max(shift, 0);
+  const int start_b = -std::min(shift, 0);
+  float gain = 1.0f;
+  if (match_gain) {
+    const double sum_a = prefix_current[start_a + overlap] - prefix_current[start_a];
+    const double sum_b = prefix_previous[start_b + overlap] - prefix_previous[start_b];
+    // A black overlap has no exposure to match.
+    if (sum_b > 1e-6 && sum_a > 1e-6) gain = static_cast<float>(sum_a / sum_b);
+  }
+  const float sum =
+      AbsoluteDifferenceSum(current.data() + start_a, previous.data() + start_b, gain, overlap, overlap, bound);
+  return static_cast<double>(sum) / overlap;
 }
 
 }  // namespace
@@ -67,26 +95,26 @@ double ShiftedProfileDifference(std::span<const float> current, std::span<const 
   const int w = static_cast<int>(current.size());
   if (previous.size() != current.size()) throw std::invalid_argument("profiles differ in length");
   if (std::abs(shift) >= w) throw std::invalid_argument("shift leaves no overlap");
-  const int overlap = w - std::abs(shift);
-  const float* a = current.data() + std::max(shift, 0);
-  const float* b = previous.data() - std::min(shift, 0);
-  float gain = 1.0f;
-  if (match_gain) {
-    float sum_a = 0.0f, sum_b = 0.0f;
-    Sums(a, b, overlap, sum_a, sum_b);
-    // A black overlap has no exposure to match.
-    if (sum_b > 1e-6f && sum_a > 1e-6f) gain = sum_a / sum_b;
-  }
-  return static_cast<double>(AbsoluteDifferenceSum(a, b, gain, overlap)) / overlap;
+  std::vector<double> prefix_current, prefix_previous;
+  PrefixSums(current, prefix_current);
+  PrefixSums(previous, prefix_previous);
+  return DifferenceAt(current, previous, prefix_current, prefix_previous, shift, match_gain);
 }
 
 ProfileMatch BestProfileShift(std::span<const float> current, std::span<const float> previous, int max_shift,
                               int min_overlap, bool match_gain) {
   const int w = static_cast<int>(current.size());
-  ProfileMatch best{0, ShiftedProfileDifference(current, previous, 0, match_gain)};
+  if (previous.size() != current.size()) throw std::invalid_argument("profiles differ in length");
+  if (w == 0) throw std::invalid_argument("shift leaves no overlap");
+  std::vector<double> prefix_current, prefix_previous;
+  PrefixSums(current, prefix_current);
+  PrefixSums(previous, prefix_previous);
+  ProfileMatch best{0, DifferenceAt(current, previous, prefix_current, prefix_previous, 0, match_gain)};
   for (int magnitude = 1; magnitude <= max_shift && w - magnitude > min_overlap; ++magnitude) {
     for (int shift : {magnitude, -magnitude}) {
-      const double f = ShiftedProfileDifference(current, previous, shift, match_gain);
+      // Abandoned once certainly not below the best: only a strictly smaller f wins.
+      const double f = DifferenceAt(current, previous, prefix_current, prefix_previous, shift, match_gain,
+                                    best.difference);
       if (f < best.difference) best = {shift, f};
     }
   }
@@ -94,11 +122,33 @@ ProfileMatch BestProfileShift(std::span<const float> current, std::span<const fl
 }
 
 void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, std::vector<float>& profile) {
-  profile.assign(crop.width, 0.0f);
+  profile.resize(crop.width);
   std::vector<uint32_t> sums(crop.width, 0);
-  for (int y = crop.y; y < crop.y + crop.height; ++y) {
-    const uint8_t* row = grey.ptr<uint8_t>(y) + crop.x;
-    for (int x = 0; x < crop.width; ++x) sums[x] += row[x];
+  const uint8_t* first = grey.ptr<uint8_t>(crop.y) + crop.x;
+  const std::size_t stride = grey.step[0];
+  int x0 = 0;
+#if defined(__SSE2__)
+  // Blocks of 16 columns summed down the rows in 16-bit registers (exact for up to 257 rows).
+  if (crop.height <= 257) {
+    const __m128i zero = _mm_setzero_si128();
+    for (; x0 + 16 <= crop.width; x0 += 16) {
+      __m128i low = zero, high = zero;
+      const uint8_t* p = first + x0;
+      for (int y = 0; y < crop.height; ++y, p += stride) {
+        const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+        low = _mm_add_epi16(low, _mm_unpacklo_epi8(v, zero));
+        high = _mm_add_epi16(high, _mm_unpackhi_epi8(v, zero));
+      }
+      alignas(16) uint16_t lanes[16];
+      _mm_store_si128(reinterpret_cast<__m128i*>(lanes), low);
+      _mm_store_si128(reinterpret_cast<__m128i*>(lanes + 8), high);
+      for (int k = 0; k < 16; ++k) sums[x0 + k] = lanes[k];
+    }
+  }
+#endif
+  for (int y = 0; y < crop.height; ++y) {
+    const uint8_t* row = first + y * stride;
+    for (int x = x0; x < crop.width; ++x) sums[x] += row[x];
   }
   const float scale = 1.0f / (255.0f * static_cast<float>(crop.height));
   for (int x = 0; x < crop.width; ++x) profile[x] = static_cast<float>(sums[x]) * scale;

@@ -29,6 +29,11 @@
 // velocities (vtrans, vrot) instead of, or blended with, these estimates; nothing downstream
 // cares where the velocity came from.
 //
+// Speed: column sums run down 16 columns at a time in 16-bit SSE2 lanes (exact); the shift
+// search takes each overlap's sums for the gain from prefix sums (double) and abandons a shift
+// as soon as its running sum shows it cannot beat the best so far (the result is the same
+// argmin; f of the winner is always complete). About 10-20 us a frame at St Lucia settings.
+//
 // Bad input (empty image, not CV_8UC1, size change mid-stream, crop outside the image, dt not
 // finite or <= 0) throws std::invalid_argument with the reason; the state is left unchanged.
 

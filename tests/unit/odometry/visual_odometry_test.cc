@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -70,6 +71,35 @@ TEST(VisualOdometryTest, BestShiftIsArgminOfEq4AndPrefersNoMotionOnTies) {
   const std::vector<float> far_right = {9, 9, 9, 9, 9, 9, 0, 1};  // ramp moved right by 6
   EXPECT_EQ(BestProfileShift(far_right, ramp, 7, 1).shift, 6);      // overlap 2 > 1
   EXPECT_NE(BestProfileShift(far_right, ramp, 7, 2).shift, 6);      // overlap 2 is not > 2
+}
+
+// The search abandons a shift once it cannot beat the best so far; it must still return the
+// exhaustive argmin (first of equal values in search order) and that shift's exact f(s).
+TEST(VisualOdometryTest, BestShiftEqualsTheExhaustiveSearchOnRandomProfiles) {
+  cv::RNG rng(17);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int w = 40 + trial * 7;
+    std::vector<float> previous(w), current(w);
+    for (float& v : previous) v = static_cast<float>(rng.uniform(0.0, 1.0));
+    const int moved = trial % 9 - 4;
+    for (int n = 0; n < w; ++n) {
+      const int source = std::clamp(n - moved, 0, w - 1);
+      current[n] = previous[source] * 1.1f + static_cast<float>(rng.uniform(-0.02, 0.02));
+    }
+    for (const bool gain : {false, true}) {
+      const int max_shift = 20, min_overlap = 10;
+      ProfileMatch expected{0, ShiftedProfileDifference(current, previous, 0, gain)};
+      for (int m = 1; m <= max_shift && w - m > min_overlap; ++m) {
+        for (int s : {m, -m}) {
+          const double f = ShiftedProfileDifference(current, previous, s, gain);
+          if (f < expected.difference) expected = {s, f};
+        }
+      }
+      const ProfileMatch got = BestProfileShift(current, previous, max_shift, min_overlap, gain);
+      EXPECT_EQ(got.shift, expected.shift) << "trial " << trial << " gain " << gain;
+      EXPECT_EQ(got.difference, expected.difference) << "trial " << trial << " gain " << gain;
+    }
+  }
 }
 
 TEST(VisualOdometryTest, GainMatchingRemovesAnExposureChange) {
