@@ -22,6 +22,7 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
   // One extra cell absorbs quantisation: any point of a free cell is then at least the robot radius
   // from every occupied cell centre, which is what ExplorationPlanner::IsPathClear checks.
   const int radius_cells = static_cast<int>(std::ceil(config.robot_radius_m / occupancy.resolution_m)) + 1;
+  const cv::Mat raw_occupied = occupied.clone();
   {
     const cv::Mat disc = cv::getStructuringElement(
         cv::MORPH_ELLIPSE, cv::Size(2 * radius_cells + 1, 2 * radius_cells + 1));
@@ -35,20 +36,24 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
   grid.origin_x_m = occupancy.origin_x_m;
   grid.origin_y_m = occupancy.origin_y_m;
   grid.cells.assign(static_cast<size_t>(grid.width) * grid.height, CellClass::kFree);
+  grid.obstacle.assign(grid.cells.size(), 0);
   // Cells past the map edge count as occupied: the robot never plans to leave the map.
   for (int cy = 0; cy < grid.height; ++cy) {
     for (int cx = 0; cx < grid.width; ++cx) {
-      int occ = 0, unk = 0;
+      int occ = 0, unk = 0, raw = 0;
       for (int y = cy * f; y < cy * f + f; ++y) {
-        if (y >= h) { occ += f; continue; }
+        if (y >= h) { occ += f; raw += f; continue; }
         const uchar* o = occupied.ptr<uchar>(y);
+        const uchar* r = raw_occupied.ptr<uchar>(y);
         const uchar* u = unknown.ptr<uchar>(y);
         for (int x = cx * f; x < cx * f + f; ++x) {
-          if (x >= w) { ++occ; continue; }
+          if (x >= w) { ++occ; ++raw; continue; }
           occ += o[x];
+          raw += r[x];
           unk += u[x];
         }
       }
+      grid.obstacle[static_cast<size_t>(cy) * grid.width + cx] = raw > 0;
       grid.cells[static_cast<size_t>(cy) * grid.width + cx] =
           occ > 0 ? CellClass::kOccupied
                   : (unk >= config.min_unknown_cells_for_goal ? CellClass::kUnknown : CellClass::kFree);

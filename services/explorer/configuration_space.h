@@ -21,6 +21,9 @@ struct CoarseGrid {
   double origin_x_m = 0.0;
   double origin_y_m = 0.0;
   std::vector<CellClass> cells;  // row-major from the lower-left cell
+  // 1 where the block itself holds an occupied occupancy cell (or lies past the map edge): the
+  // cells a robot that finds itself inside the dilation margin must not cross to get out.
+  std::vector<uint8_t> obstacle;
 
   CellClass At(int x, int y) const { return cells[static_cast<size_t>(y) * width + x]; }
   bool Contains(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }

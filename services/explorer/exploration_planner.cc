@@ -16,6 +16,39 @@ double NormalizeAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
 constexpr int kNeighbourDx[8] = {1, 0, -1, 0, 1, -1, -1, 1};
 constexpr int kNeighbourDy[8] = {0, 1, 0, -1, 1, 1, -1, -1};
 
+// Breadth-first search from the robot's cell through cells that hold no obstacle themselves
+// (dilation margin allowed, unknown not) to the nearest cell with a finite transform cost; the
+// cells after the robot's, or empty when there is none within max_cells steps.
+std::vector<std::pair<int, int>> EscapePath(const CoarseGrid& cs, const std::vector<int32_t>& cost, int rx, int ry) {
+  constexpr int kMaxSteps = 25;
+  const int w = cs.width;
+  std::vector<int32_t> parent(cs.cells.size(), -1);
+  std::vector<int> depth(cs.cells.size(), 0);
+  std::vector<size_t> queue{static_cast<size_t>(ry) * w + rx};
+  parent[queue.front()] = static_cast<int32_t>(queue.front());
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const size_t i = queue[head];
+    const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
+    if (head > 0 && cost[i] != kUnreachable) {
+      std::vector<std::pair<int, int>> path;
+      for (size_t c = i; parent[c] != static_cast<int32_t>(c); c = static_cast<size_t>(parent[c]))
+        path.emplace_back(static_cast<int>(c % w), static_cast<int>(c / w));
+      return {path.rbegin(), path.rend()};
+    }
+    if (depth[i] >= kMaxSteps) continue;
+    for (int k = 0; k < 4; ++k) {  // 4-connected: no corner cutting past an obstacle
+      const int nx = x + kNeighbourDx[k], ny = y + kNeighbourDy[k];
+      if (!cs.Contains(nx, ny)) continue;
+      const size_t j = static_cast<size_t>(ny) * w + nx;
+      if (parent[j] >= 0 || cs.obstacle[j] || cs.cells[j] == CellClass::kUnknown) continue;
+      parent[j] = static_cast<int32_t>(i);
+      depth[j] = depth[i] + 1;
+      queue.push_back(j);
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 ExplorationPlanner::ExplorationPlanner(ExplorerConfig config) : config_(std::move(config)) {
@@ -71,19 +104,26 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   while (true) {
     const std::vector<int32_t> cost = ComputeExplorationTransform(cs.width, cs.height, traversable, goal);
     Plan plan;
-    if (cost[robot_index] == kUnreachable) {
+    // A robot inside the dilation margin (after a pirouette beside a wall, or when the grid has
+    // just marked an obstacle next to it) first steps out to the nearest cell that can reach a goal.
+    const std::vector<std::pair<int, int>> escape =
+        cost[robot_index] == kUnreachable ? EscapePath(cs, cost, rx, ry) : std::vector<std::pair<int, int>>{};
+    if (cost[robot_index] == kUnreachable && escape.empty()) {
       plan.complete = true;
       plan.commands.push_back({MotionCommand::Kind::kStop});
       plan.reason = "no reachable unknown space remains (" + std::to_string(set_aside_.size()) +
                     " goals set aside)";
       return plan;
     }
-    plan.transform_cost = cost[robot_index];
     // Descend the transform; path holds free cells, the goal is where the descent would step next.
     std::vector<std::pair<int, int>> path{{rx, ry}};
-    int gx = rx, gy = ry;
-    if (!goal[robot_index]) {
-      int x = rx, y = ry;
+    path.insert(path.end(), escape.begin(), escape.end());
+    const auto [sx, sy] = path.back();
+    const size_t start_index = static_cast<size_t>(sy) * w + sx;
+    plan.transform_cost = cost[start_index];
+    int gx = sx, gy = sy;
+    if (!goal[start_index]) {
+      int x = sx, y = sy;
       auto open = [&](int cx, int cy) {
         const size_t i = static_cast<size_t>(cy) * w + cx;
         return traversable[i] || goal[i];
@@ -129,7 +169,13 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     // Piece-wise linear motion: one waypoint per run of equal steps.
     std::vector<std::pair<double, double>> waypoints;
     const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
-    if (off_centre > 0.25 * cs.cell_size_m) waypoints.emplace_back(cs.CentreX(rx), cs.CentreY(ry));
+    // First to the centre of the robot's cell, unless that step itself comes closer to an obstacle
+    // than the robot already is (it stands off-centre beside a wall): then straight on.
+    if (off_centre > 0.25 * cs.cell_size_m) {
+      const double to_centre = std::atan2(cs.CentreY(ry) - robot.y, cs.CentreX(rx) - robot.x);
+      if (IsPathClear(occupancy, {robot.x, robot.y, to_centre}, off_centre))
+        waypoints.emplace_back(cs.CentreX(rx), cs.CentreY(ry));
+    }
     for (size_t i = 1; i < path.size(); ++i) {
       const bool run_ends = i + 1 == path.size() ||
                             path[i + 1].first - path[i].first != path[i].first - path[i - 1].first ||
@@ -158,6 +204,12 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
 }
 
 bool ExplorationPlanner::IsPathClear(const GridView& occupancy, const Pose2D& from, double distance_m) const {
+  return !ObstacleOnPath(occupancy, from, distance_m).has_value();
+}
+
+std::optional<std::pair<double, double>> ExplorationPlanner::ObstacleOnPath(const GridView& occupancy,
+                                                                           const Pose2D& from,
+                                                                           double distance_m) const {
   occupancy.Validate();
   if (!IsFinite(from) || !std::isfinite(distance_m)) throw std::invalid_argument("pose or distance not finite");
   const double x0 = from.x, y0 = from.y;
@@ -168,17 +220,32 @@ bool ExplorationPlanner::IsPathClear(const GridView& occupancy, const Pose2D& fr
   const int cy_min = static_cast<int>(std::floor((std::min(y0, y1) - r - occupancy.origin_y_m) / res));
   const int cy_max = static_cast<int>(std::floor((std::max(y0, y1) + r - occupancy.origin_y_m) / res));
   const double sx = x1 - x0, sy = y1 - y0, len2 = sx * sx + sy * sy;
+  auto blocking = [&](int cx, int cy) {
+    return cx < 0 || cy < 0 || cx >= occupancy.width || cy >= occupancy.height ||
+           occupancy.ClassAt(cx, cy) == CellClass::kOccupied;
+  };
+  auto centre = [&](int cx, int cy) {
+    return std::pair{occupancy.origin_x_m + (cx + 0.5) * res, occupancy.origin_y_m + (cy + 0.5) * res};
+  };
+  // A robot that ended up inside the margin (a pirouette beside a wall) may move as long as it
+  // never gets closer to an obstacle than it already is: that is how it gets out.
+  double start_clearance = r;
+  for (int cy = cy_min; cy <= cy_max; ++cy)
+    for (int cx = cx_min; cx <= cx_max; ++cx)
+      if (blocking(cx, cy)) {
+        const auto [px, py] = centre(cx, cy);
+        start_clearance = std::min(start_clearance, std::hypot(px - x0, py - y0));
+      }
   for (int cy = cy_min; cy <= cy_max; ++cy) {
     for (int cx = cx_min; cx <= cx_max; ++cx) {
-      const double px = occupancy.origin_x_m + (cx + 0.5) * res, py = occupancy.origin_y_m + (cy + 0.5) * res;
+      if (!blocking(cx, cy)) continue;
+      const auto [px, py] = centre(cx, cy);
       const double t = len2 > 0 ? std::clamp(((px - x0) * sx + (py - y0) * sy) / len2, 0.0, 1.0) : 0.0;
       const double d = std::hypot(px - (x0 + t * sx), py - (y0 + t * sy));
-      if (d > r) continue;
-      if (cx < 0 || cy < 0 || cx >= occupancy.width || cy >= occupancy.height) return false;
-      if (occupancy.ClassAt(cx, cy) == CellClass::kOccupied) return false;
+      if (d <= r && d < start_clearance - 1e-9) return std::pair{px, py};
     }
   }
-  return true;
+  return std::nullopt;
 }
 
 proto::ExplorerState ExplorationPlanner::ToProto() const {

@@ -2,8 +2,9 @@
 // Exploration by the distance transform (paper 003 section 4). Each call to PlanFrom:
 //  1. builds the configuration space on the coarse exploration grid (configuration_space.h);
 //  2. marks every reachable unknown coarse cell as a goal and runs the exploration transform
-//     (exploration_transform.h); if the robot's cell cannot reach any goal, exploration is
-//     complete;
+//     (exploration_transform.h); a robot standing inside the dilation margin (beside a wall after
+//     a pirouette) first steps out through cells that hold no obstacle themselves; if no goal can
+//     be reached even so, exploration is complete;
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
 //     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees).
@@ -62,8 +63,11 @@ class ExplorationPlanner {
 
   // Look before you move: true when no occupied cell (or cell off the map) lies within the robot
   // radius of the straight segment from `from` along its heading for distance_m (negative =
-  // backwards).
+  // backwards), except cells the robot is already that close to and moves away from.
   bool IsPathClear(const GridView& occupancy, const Pose2D& from, double distance_m) const;
+  // The centre of a cell that blocks that move, if any.
+  std::optional<std::pair<double, double>> ObstacleOnPath(const GridView& occupancy, const Pose2D& from,
+                                                          double distance_m) const;
 
   // The robot has finished a pirouette at this pose.
   void RecordPirouette(const Pose2D& where);

@@ -22,7 +22,6 @@ using Clock = std::chrono::steady_clock;
 
 constexpr const char* kStateKind = "rslam.explorer.ExplorerNodeState";
 constexpr uint32_t kStateVersion = 1;
-constexpr int kMaxReplansPerStep = 8;  // look-before-you-move failures in a row before waiting for a grid
 
 // Why a grid cannot be used, or "" when it can.
 std::string GridProblem(const msg::OccupancyGrid& g, int64_t max_cells) {
@@ -234,48 +233,50 @@ class ExplorerNode::Controller {
       return;
     }
     const GridView view = View();
-    for (int attempt = 0; attempt < kMaxReplansPerStep; ++attempt) {
-      if (!plan_ || next_command_ >= plan_->commands.size()) {
-        try {
-          plan_ = planner_.PlanFrom(view, RobotPose());
-        } catch (const std::exception& e) {  // robot off the map, or a planner bug: say so, wait
-          plan_.reset();
-          reason_ = std::string("cannot plan: ") + e.what();
-          PublishStatusIfChanged();
-          return;
-        }
-        next_command_ = 0;
-        expected_pose_ = RobotPose();
-        NoteSetAside();
-        if (plan_->complete) {
-          Complete(plan_->reason);
-          return;
-        }
-        state_ = msg::ExplorationState::EXPLORATION_EXPLORING;
-        if (plan_->goal_x >= 0) {
-          const double cell = grid_->resolution_m * config_.planner.coarse_cell_factor;
-          goal_x_m_ = grid_->origin_x_m + (plan_->goal_x + 0.5) * cell;
-          goal_y_m_ = grid_->origin_y_m + (plan_->goal_y + 0.5) * cell;
-        }
-        spdlog::info("plan: {} ({} commands) towards ({:.2f}, {:.2f})", plan_->reason, plan_->commands.size(),
-                     goal_x_m_, goal_y_m_);
-      }
-      const MotionCommand& command = plan_->commands[next_command_];
-      if (command.kind == MotionCommand::Kind::kMove &&
-          !planner_.IsPathClear(view, expected_pose_, command.distance_m)) {
-        // Look before you move: the latest grid shows an obstacle on the way.
-        planner_.ReportBlocked(*plan_);
+    if (!plan_ || next_command_ >= plan_->commands.size()) {
+      try {
+        plan_ = planner_.PlanFrom(view, RobotPose());
+      } catch (const std::exception& e) {  // robot off the map, or a planner bug: say so, wait
         plan_.reset();
-        reason_ = "look before you move: the path ahead is blocked, planning again";
-        NoteSetAside();
-        continue;
+        reason_ = std::string("cannot plan: ") + e.what();
+        PublishStatusIfChanged();
+        return;
       }
-      Send(command);
+      next_command_ = 0;
+      expected_pose_ = RobotPose();
+      NoteSetAside();
+      if (plan_->complete) {
+        Complete(plan_->reason);
+        return;
+      }
+      state_ = msg::ExplorationState::EXPLORATION_EXPLORING;
+      if (plan_->goal_x >= 0) {
+        const double cell = grid_->resolution_m * config_.planner.coarse_cell_factor;
+        goal_x_m_ = grid_->origin_x_m + (plan_->goal_x + 0.5) * cell;
+        goal_y_m_ = grid_->origin_y_m + (plan_->goal_y + 0.5) * cell;
+      }
+      spdlog::info("plan: {} ({} commands) towards ({:.2f}, {:.2f})", plan_->reason, plan_->commands.size(),
+                   goal_x_m_, goal_y_m_);
+    }
+    const MotionCommand& command = plan_->commands[next_command_];
+    const auto obstacle = command.kind == MotionCommand::Kind::kMove
+                              ? planner_.ObstacleOnPath(view, expected_pose_, command.distance_m)
+                              : std::nullopt;
+    if (obstacle) {
+      // Look before you move: the latest grid shows an obstacle on the way.
+      spdlog::info("blocked: move {:.2f} m from ({:.2f}, {:.2f}, {:.2f}) passes the obstacle at ({:.3f}, {:.3f})",
+                   command.distance_m, expected_pose_.x, expected_pose_.y, expected_pose_.theta, obstacle->first,
+                   obstacle->second);
+      planner_.ReportBlocked(*plan_);
+      plan_.reset();
+      reason_ = "look before you move: the path ahead is blocked, planning again";
+      NoteSetAside();
+      // The same grid would give the same plan: look again with the next one.
+      WaitForFreshGrid();
       PublishStatusIfChanged();
       return;
     }
-    reason_ = "every plan was blocked; waiting for a new grid";
-    WaitForFreshGrid();
+    Send(command);
     PublishStatusIfChanged();
   }
 

@@ -8,6 +8,8 @@
 #include <stdexcept>
 
 #include "services/camera/image_message.h"
+#include "services/occupancy/obstacle_profile_pipeline.h"
+#include "services/odometry/floor_odometry.h"
 #include "services/odometry/visual_odometry.h"
 
 namespace rslam::odometry {
@@ -15,7 +17,12 @@ namespace rslam::odometry {
 class OdometryNode::Impl {
  public:
   Impl(ServiceContext& context, const Config& config)
-      : context_(context), config_(config), odometry_(config.visual) {}
+      : context_(context), config_(config), odometry_(config.visual) {
+    if (config.floor.enabled) {
+      boundary_ = std::make_unique<occupancy::ObstacleProfilePipeline>(config.floor.boundary);
+      floor_ = std::make_unique<FloorOdometry>(config.floor.registration);
+    }
+  }
 
   void Start(const std::shared_ptr<Impl>& self, std::vector<std::shared_ptr<void>>& subscriptions) {
     publisher_ = context_.Advertise(bus::topics::kOdometryVelocity);
@@ -89,14 +96,17 @@ class OdometryNode::Impl {
     }
     if (restart) {
       odometry_.Reset();
+      if (floor_) floor_->Reset();
       dt_s = 0.0;
     }
     Velocity velocity;
     try {
       // The first frame's dt is ignored by the odometry but must be valid.
       velocity = odometry_.Update(grey, restart ? 1.0 / config_.visual.camera_hz : dt_s);
+      if (floor_) FloorMotion(image, dt_s, velocity);
     } catch (const std::invalid_argument& e) {
       odometry_.Reset();
+      if (floor_) floor_->Reset();
       previous_stamp_ns_.reset();
       return context_.Reject("unusable_image", e.what());
     }
@@ -113,11 +123,36 @@ class OdometryNode::Impl {
     context_.SetLastFrame(image.header.frame_seq, image.header.stamp_ns);
   }
 
+  // Replaces the column-profile velocity by the floor-boundary registration's, seeded with it
+  // (and left as it is when the frame cannot be registered). Throws std::invalid_argument for an
+  // image the boundary pipeline cannot read (not bgr8, or not the configured camera's size).
+  void FloorMotion(const msg::Image& image, double dt_s, Velocity& velocity) {
+    if (image.encoding != camera::kBgr8)
+      throw std::invalid_argument("floor_odometry needs bgr8 images, got " + image.encoding);
+    const occupancy::RadialObstacleProfile profile = boundary_->ProfileFromImage(camera::ImageView(image));
+    boundary_points_.clear();
+    for (size_t i = 0; i < profile.bins.size(); ++i) {
+      if (profile.bins[i].status != occupancy::BinStatus::kObstacle) continue;
+      const double bearing = profile.BinCentre(i), range = profile.bins[i].range_m;
+      boundary_points_.emplace_back(range * std::cos(bearing), range * std::sin(bearing));
+    }
+    PlanarMotion prior;
+    prior.dx = velocity.vtrans * dt_s;
+    prior.dtheta = velocity.vrot * dt_s;
+    const PlanarMotion motion = floor_->Update(boundary_points_, prior);
+    if (!motion.measured || dt_s <= 0) return;
+    velocity.vtrans = motion.dx / dt_s;
+    velocity.vrot = motion.dtheta / dt_s;
+  }
+
   ServiceContext& context_;
   const Config config_;
   std::mutex mutex_;
   bool stopped_ = false;
   VisualOdometry odometry_;
+  std::unique_ptr<occupancy::ObstacleProfilePipeline> boundary_;  // floor odometry only
+  std::unique_ptr<FloorOdometry> floor_;
+  std::vector<Eigen::Vector2d> boundary_points_;
   std::optional<int64_t> previous_stamp_ns_;
   cv::Size previous_size_;
   std::shared_ptr<bus::Publisher<msg::Velocity>> publisher_;

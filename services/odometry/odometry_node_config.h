@@ -6,15 +6,38 @@
 #include <cstdint>
 
 #include "common/config/config_error.h"
+#include "services/occupancy/obstacle_profile_pipeline.h"
+#include "services/odometry/floor_odometry.h"
 #include "services/odometry/visual_odometry_config.h"
 
 namespace rslam::odometry {
+
+// Metric translation (and rotation) from the floor boundary (floor_odometry.h). The camera and
+// floor keys are those of the occupancy service's section, so one YAML anchor can serve both.
+struct FloorOdometryNodeConfig {
+  bool enabled = false;
+  occupancy::ObstacleProfileConfig boundary;
+  FloorOdometryConfig registration;
+
+  template <class V>
+  void VisitFields(V& v) {
+    v("enabled", enabled, "register floor-boundary points for metric motion (needs bgr8 images)");
+    boundary.VisitFields(v);
+    registration.VisitFields(v);
+  }
+  void Validate() const {
+    if (!enabled) return;
+    boundary.Validate();
+    registration.Validate();
+  }
+};
 
 struct OdometryNodeConfig {
   VisualOdometryConfig visual;
   bool use_wheel_odometry = false;  // republish robot/wheel_odometry instead of visual odometry
   double max_frame_gap_s = 5.0;     // a larger stamp gap restarts the visual odometry
   int64_t max_pixels = 16'000'000;  // larger images are rejected
+  FloorOdometryNodeConfig floor;
 
   template <class V>
   void VisitFields(V& v) {
@@ -24,12 +47,14 @@ struct OdometryNodeConfig {
     v("max_frame_gap_s", max_frame_gap_s,
       "a frame more than this after the previous one restarts the visual odometry (zero velocity, dt 0)");
     v("max_pixels", max_pixels, "images with more pixels are rejected");
+    v("floor_odometry", floor, "metric odometry from the floor boundary (camera of known height over a flat floor)");
   }
 
   void Validate() const {
     visual.Validate();
     Require(std::isfinite(max_frame_gap_s) && max_frame_gap_s > 0, "max_frame_gap_s", "must be positive");
     Require(max_pixels >= 1, "max_pixels", "must be >= 1");
+    floor.Validate();
   }
 };
 

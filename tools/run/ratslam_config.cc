@@ -74,6 +74,9 @@ RatSlamConfig RatSlamConfigFromYaml(const YAML::Node& root) {
   RatSlamConfig config;
   const YAML::Node document = root ? root : YAML::Node(YAML::NodeType::Map);
   LoadConfigSection(document, "odometry", config.odometry);
+  // The runner reads grey frames and replays the column-profile odometry only.
+  if (config.odometry.floor.enabled)
+    throw ConfigError("odometry.floor_odometry.enabled", "not supported by `rslam run` (run the services instead)");
   LoadConfigSection(document, "templates", config.templates);
   LoadConfigSection(document, "pose_cells", config.pose_cells);
   LoadConfigSection(document, "experience_map", config.experience_map);

@@ -93,6 +93,45 @@ TEST(ExplorationPlannerTest, LooksBeforeItMoves) {
   EXPECT_THROW(planner.IsPathClear(grid.View(), robot, NAN), std::invalid_argument);
 }
 
+TEST(ExplorationPlannerTest, MovingAwayFromAnObstacleInsideTheRadiusIsClear) {
+  TestGrid grid(40, 40, 0);
+  ExplorationPlanner planner(Config());
+  grid.Set(9, 20, 100);  // centre (0.475, 1.025): 3.2 cm behind a robot at (0.5, 1.0)
+  const Pose2D robot{0.5, 1.0, 0.0};
+  EXPECT_TRUE(planner.IsPathClear(grid.View(), robot, 1.0));    // away from it
+  EXPECT_FALSE(planner.IsPathClear(grid.View(), robot, -0.3));  // back into it
+}
+
+TEST(ExplorationPlannerTest, RobotInsideTheMarginStepsOutInsteadOfCallingItComplete) {
+  // A wall at x = 10 (0.5 m); the robot stands 0.1 m from it, inside the dilated margin, and the
+  // only unknown space is far away on the open side.
+  TestGrid grid(40, 40, 0);
+  for (int y = 0; y < 40; ++y) grid.Set(10, y, 100);
+  for (int y = 30; y < 39; ++y)
+    for (int x = 30; x < 39; ++x) grid.Set(x, y, -1);
+  ExplorerConfig config = Config();
+  config.robot_radius_m = 0.15;
+  ExplorationPlanner planner(config);
+  const Pose2D robot{0.62, 0.6, 0.0};
+  const Plan plan = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(plan.complete) << plan.reason;
+  ASSERT_TRUE(plan.has_target);
+  EXPECT_GT(plan.target.x, 1.4);
+  // Every straight move of the plan passes look before you move.
+  Pose2D at = robot;
+  for (const MotionCommand& c : plan.commands) {
+    if (c.kind == Kind::kRotate) at.theta += c.angle_rad;
+    if (c.kind != Kind::kMove) continue;
+    EXPECT_TRUE(planner.IsPathClear(grid.View(), at, c.distance_m));
+    at.x += c.distance_m * std::cos(at.theta);
+    at.y += c.distance_m * std::sin(at.theta);
+  }
+  // Walled in on every side by real obstacles, there is no way out: complete.
+  for (int x = 0; x < 40; ++x) grid.Set(x, 14, 100);
+  for (int y = 0; y < 15; ++y) grid.Set(16, y, 100);
+  EXPECT_TRUE(planner.PlanFrom(grid.View(), robot).complete);
+}
+
 TEST(ExplorationPlannerTest, GoalStillUnknownAfterLookingIsSetAsideAndExplorationEnds) {
   // A known room with one unknown cell that no sensor will ever resolve.
   TestGrid grid(20, 20, 0);

@@ -1,0 +1,102 @@
+#pragma once
+// Metric visual odometry from the floor boundary: planar motion by registering, frame after frame,
+// the points where the floor meets obstacles (a camera-made range scan) against a key frame's.
+//
+// Why: the perceptual speed of paper 000 (eq. 6) is the image change, not a distance; its scale
+// depends on how far and how textured the scene is, so a metric map (the occupancy grid, which
+// hangs its range profiles on the experience poses) cannot be built on it. A camera of known
+// height and tilt over a flat floor of one colour (paper 003's assumptions) measures ranges: the
+// first non-floor pixel above the floor on each bearing, read through the inverse perspective
+// map, is the obstacle's base in the robot frame (services/occupancy RadialObstacleProfile).
+//
+// Each frame's boundary points are registered to the key frame's by point-to-line ICP in the
+// plane (x forward, y left, theta counter-clockwise): nearest key point within
+// max_pair_distance_m, the line through it and its profile neighbours, Gauss-Newton on
+// (x, y, theta). The key frame is replaced once the robot has moved keyframe_translation_m or
+// turned keyframe_rotation_rad from it, or when a frame cannot be registered, so per-frame pixel
+// noise does not accumulate over a straight move: the distance travelled from a key frame is one
+// registration, not the sum of many small ones.
+//
+// A frame is not registered (the caller's prior motion is returned, measured = false) when
+// either frame has fewer than min_points points, too few pairs survive, or the geometry leaves a
+// direction unconstrained (a corridor's parallel walls say nothing about motion along them):
+// smallest eigenvalue of the normal matrix per pair below min_constraint.
+//
+// Pure, deterministic, no allocation after warm-up beyond the key frame's copy.
+
+#include <Eigen/Core>
+
+#include <span>
+#include <vector>
+
+#include "common/config/config_error.h"
+
+namespace rslam::odometry {
+
+struct FloorOdometryConfig {
+  double max_range_m = 1.5;             // boundary points farther away are not used
+  int min_points = 12;                  // per frame, and pairs after outlier rejection
+  double max_pair_distance_m = 0.10;    // a pair farther apart (after the prediction) is an outlier
+  double keyframe_translation_m = 0.4;  // new key frame after this much travel from it ...
+  double keyframe_rotation_rad = 0.35;  // ... or this much turn
+  int iterations = 12;
+  double min_constraint = 0.02;         // smallest normal-matrix eigenvalue per pair (see above)
+
+  template <class V>
+  void VisitFields(V& v) {
+    v("max_range_m", max_range_m, "floor-boundary points farther than this are not used (m)");
+    v("min_points", min_points, "boundary points (and surviving pairs) needed to register a frame");
+    v("max_pair_distance_m", max_pair_distance_m, "point pairs farther apart are outliers (m)");
+    v("keyframe_translation_m", keyframe_translation_m, "a new key frame after this much travel (m)");
+    v("keyframe_rotation_rad", keyframe_rotation_rad, "... or this much turn (rad)");
+    v("iterations", iterations, "ICP iterations per frame");
+    v("min_constraint", min_constraint,
+      "smallest eigenvalue of the ICP normal matrix per pair; below it the frame is not registered");
+  }
+  void Validate() const {
+    Require(max_range_m > 0 && max_range_m < 100, "max_range_m", "must be in (0, 100)");
+    Require(min_points >= 3, "min_points", "must be >= 3");
+    Require(max_pair_distance_m > 0, "max_pair_distance_m", "must be positive");
+    Require(keyframe_translation_m > 0, "keyframe_translation_m", "must be positive");
+    Require(keyframe_rotation_rad > 0 && keyframe_rotation_rad < 3.14, "keyframe_rotation_rad", "must be in (0, pi)");
+    Require(iterations >= 1 && iterations <= 100, "iterations", "must be 1..100");
+    Require(min_constraint >= 0, "min_constraint", "must be >= 0");
+  }
+};
+
+// Planar motion from the previous frame's robot pose to this frame's, in the previous frame.
+struct PlanarMotion {
+  double dx = 0.0;      // m, forward
+  double dy = 0.0;      // m, left
+  double dtheta = 0.0;  // rad, counter-clockwise
+  bool measured = false;  // false: the prior was returned (see the header comment)
+  int pairs = 0;          // point pairs of the last ICP iteration
+};
+
+class FloorOdometry {
+ public:
+  explicit FloorOdometry(FloorOdometryConfig config);  // throws ConfigError on a bad config
+  FloorOdometry(const FloorOdometry&) = delete;
+  FloorOdometry& operator=(const FloorOdometry&) = delete;
+
+  // boundary: this frame's floor-boundary points in the robot frame, in bearing order (points
+  // beyond max_range_m are dropped here). prior: the motion expected from other cues (the
+  // column-shift rotation, the previous speed); it seeds the registration and is returned when
+  // the frame cannot be registered. Non-finite points or prior throw std::invalid_argument.
+  PlanarMotion Update(std::span<const Eigen::Vector2d> boundary, const PlanarMotion& prior);
+
+  void Reset();
+  const FloorOdometryConfig& config() const { return config_; }
+
+ private:
+  void MakeKeyFrame(std::vector<Eigen::Vector2d>&& points);
+
+  const FloorOdometryConfig config_;
+  bool has_key_ = false;
+  std::vector<Eigen::Vector2d> key_points_;
+  std::vector<Eigen::Vector2d> key_normals_;  // unit normal of the boundary line at each key point
+  Eigen::Vector3d key_to_robot_ = Eigen::Vector3d::Zero();  // robot pose in the key frame (x, y, theta)
+  std::vector<Eigen::Vector2d> scratch_;
+};
+
+}  // namespace rslam::odometry

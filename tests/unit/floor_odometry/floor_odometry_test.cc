@@ -1,0 +1,162 @@
+// Floor-boundary odometry (services/odometry/floor_odometry.h): exact geometry first, then the
+// whole chain on images the simulator renders in the shipped uwb-room world (camera -> floor
+// mask -> radial obstacle profile -> registration) against the ground truth it rendered from.
+
+#include "services/odometry/floor_odometry.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "services/occupancy/obstacle_profile_pipeline.h"
+#include "services/occupancy/occupancy_node_config.h"
+#include "tools/sim/camera_renderer.h"
+#include "tools/sim/world_map.h"
+
+namespace rslam::odometry {
+namespace {
+
+// Points of the walls of an axis-aligned box room seen from pose (x, y, theta): one point per
+// degree over a 60-degree field of view, by ray casting against the four walls.
+std::vector<Eigen::Vector2d> BoxRoomView(double x, double y, double theta, double half_w, double half_h) {
+  std::vector<Eigen::Vector2d> out;
+  for (int i = -30; i < 30; ++i) {
+    const double bearing = (i + 0.5) * M_PI / 180.0, a = theta + bearing;
+    const double c = std::cos(a), s = std::sin(a);
+    double t = 1e9;
+    if (c > 1e-9) t = std::min(t, (half_w - x) / c);
+    if (c < -1e-9) t = std::min(t, (-half_w - x) / c);
+    if (s > 1e-9) t = std::min(t, (half_h - y) / s);
+    if (s < -1e-9) t = std::min(t, (-half_h - y) / s);
+    out.emplace_back(t * std::cos(bearing), t * std::sin(bearing));
+  }
+  return out;
+}
+
+FloorOdometryConfig Config() {
+  FloorOdometryConfig c;
+  c.max_range_m = 3.0;
+  return c;
+}
+
+TEST(FloorOdometryTest, RecoversAStraightMoveAndATurnInABoxRoom) {
+  FloorOdometry odometry(Config());
+  // Facing a corner of a 3 m x 2 m room from near its centre: two walls constrain every direction.
+  double x = -0.2, y = -0.1, theta = 0.5;
+  odometry.Update(BoxRoomView(x, y, theta, 1.5, 1.0), {});
+  double travelled = 0.0;
+  for (int i = 0; i < 20; ++i) {  // 2.5 cm per frame, the prior says nothing
+    x += 0.025 * std::cos(theta);
+    y += 0.025 * std::sin(theta);
+    const PlanarMotion m = odometry.Update(BoxRoomView(x, y, theta, 1.5, 1.0), {});
+    ASSERT_TRUE(m.measured) << "frame " << i;
+    travelled += m.dx;
+    EXPECT_NEAR(m.dy, 0.0, 1e-3);
+    EXPECT_NEAR(m.dtheta, 0.0, 1e-3);
+  }
+  EXPECT_NEAR(travelled, 0.5, 2e-3);
+  double turned = 0.0;
+  for (int i = 0; i < 10; ++i) {  // 0.05 rad per frame; the prior is 20% short
+    theta += 0.05;
+    PlanarMotion prior;
+    prior.dtheta = 0.04;
+    const PlanarMotion m = odometry.Update(BoxRoomView(x, y, theta, 1.5, 1.0), prior);
+    ASSERT_TRUE(m.measured);
+    turned += m.dtheta;
+    EXPECT_NEAR(m.dx, 0.0, 2e-3);
+  }
+  EXPECT_NEAR(turned, 0.5, 0.01);
+}
+
+TEST(FloorOdometryTest, ParallelWallsLeaveTheMotionToThePrior) {
+  // A corridor along x: its walls say nothing about motion along it.
+  FloorOdometry odometry(Config());
+  auto corridor = [](double x) {  // right wall then left wall, each in bearing order
+    std::vector<Eigen::Vector2d> out;
+    for (double px = 2.5; px > 0.4; px -= 0.05) out.emplace_back(px - x, -0.5);
+    for (double px = 0.4; px < 2.5; px += 0.05) out.emplace_back(px - x, 0.5);
+    return out;
+  };
+  odometry.Update(corridor(0.0), {});
+  PlanarMotion prior;
+  prior.dx = 0.02;
+  const PlanarMotion m = odometry.Update(corridor(0.03), prior);
+  EXPECT_FALSE(m.measured);
+  EXPECT_DOUBLE_EQ(m.dx, 0.02);
+}
+
+TEST(FloorOdometryTest, TooFewPointsOrBadInputAreHandled) {
+  FloorOdometry odometry(Config());
+  const std::vector<Eigen::Vector2d> few = {{1.0, 0.0}, {1.0, 0.1}};
+  PlanarMotion prior;
+  prior.dtheta = 0.1;
+  odometry.Update(few, prior);
+  const PlanarMotion m = odometry.Update(few, prior);
+  EXPECT_FALSE(m.measured);
+  EXPECT_DOUBLE_EQ(m.dtheta, 0.1);
+  const std::vector<Eigen::Vector2d> bad = {{NAN, 1.0}};
+  EXPECT_THROW(odometry.Update(bad, prior), std::invalid_argument);
+  prior.dx = INFINITY;
+  EXPECT_THROW(odometry.Update(few, prior), std::invalid_argument);
+  FloorOdometryConfig config;
+  config.min_points = 1;
+  EXPECT_THROW(FloorOdometry{config}, ConfigError);
+}
+
+// The rendered chain in the shipped world.
+class RenderedFloorOdometryTest : public ::testing::Test {
+ protected:
+  RenderedFloorOdometryTest()
+      : world_(sim::WorldMap::LoadFromYaml(RSLAM_SOURCE_DIR "/deploy/worlds/uwb-room.yaml")),
+        renderer_(world_, sim::SceneConfig{}, sim::CameraConfig{}),
+        boundary_(occupancy::SimulatorMatchedPipelineConfig()),
+        odometry_(RenderedConfig()) {}
+  static FloorOdometryConfig RenderedConfig() {
+    FloorOdometryConfig c;
+    c.max_range_m = 2.5;
+    return c;
+  }
+
+  PlanarMotion Step(const sim::Pose2D& pose, const PlanarMotion& prior) {
+    const cv::Mat image = renderer_.Render(pose, frame_++);
+    const occupancy::RadialObstacleProfile profile = boundary_.ProfileFromImage(image);
+    std::vector<Eigen::Vector2d> points;
+    for (size_t i = 0; i < profile.bins.size(); ++i)
+      if (profile.bins[i].status == occupancy::BinStatus::kObstacle)
+        points.emplace_back(profile.bins[i].range_m * std::cos(profile.BinCentre(i)),
+                            profile.bins[i].range_m * std::sin(profile.BinCentre(i)));
+    return odometry_.Update(points, prior);
+  }
+
+  sim::WorldMap world_;
+  sim::CameraRenderer renderer_;
+  occupancy::ObstacleProfilePipeline boundary_;
+  FloorOdometry odometry_;
+  uint64_t frame_ = 0;
+};
+
+TEST_F(RenderedFloorOdometryTest, StraightMovesTowardsWallsMeasureTheDistance) {
+  // Near the demo's start, towards the walls ahead and behind (1.2 - 1.9 m away): 0.8 m at
+  // 2.5 cm per frame with no speed prior, so the distance is the registration's alone.
+  for (const auto& [x, heading] : {std::pair{4.96, 0.0}, std::pair{4.36, M_PI}}) {
+    odometry_.Reset();
+    sim::Pose2D pose{x, -2.70, heading};
+    Step(pose, {});
+    double travelled = 0.0;
+    int measured = 0;
+    for (int i = 0; i < 32; ++i) {
+      pose.x += 0.025 * std::cos(heading);
+      pose.y += 0.025 * std::sin(heading);
+      const PlanarMotion m = Step(pose, {});
+      travelled += m.dx;
+      measured += m.measured;
+    }
+    SCOPED_TRACE("heading " + std::to_string(heading));
+    EXPECT_EQ(measured, 32);
+    EXPECT_NEAR(travelled, 0.8, 0.04);
+  }
+}
+
+}  // namespace
+}  // namespace rslam::odometry
