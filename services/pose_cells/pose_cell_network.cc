@@ -8,6 +8,10 @@
 #include <string>
 #include <utility>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 namespace rslam::pose_cells {
 namespace {
 
@@ -46,6 +50,69 @@ inline double WrapReal(double v, double n) {
 inline void AddScaled(float* __restrict dst, const float* __restrict src, float w, int lo, int hi,
                       int shift) {
   for (int x = lo; x < hi; ++x) dst[x] += w * src[x + shift];
+}
+
+// dst[x] = w[0] * src[0][x] + w[1] * src[1][x] + ..., added left to right starting from 0, for
+// x in [lo, hi): bit for bit what AddScaled passes tap after tap into a zeroed row give, with
+// one store per cell instead of a load and a store per tap. Each cell is computed on its own
+// (no fused multiply-add), so SSE2, AVX2 and plain C++ give the same floats.
+void WeightedSumPortable(float* __restrict dst, const float* const* src, const float* w, int taps, int lo, int hi) {
+  int x = lo;
+#if defined(__SSE2__)
+  for (; x + 4 <= hi; x += 4) {
+    __m128 acc = _mm_setzero_ps();
+    for (int k = 0; k < taps; ++k) acc = _mm_add_ps(acc, _mm_mul_ps(_mm_set1_ps(w[k]), _mm_loadu_ps(src[k] + x)));
+    _mm_storeu_ps(dst + x, acc);
+  }
+#endif
+  for (; x < hi; ++x) {
+    float acc = 0.0f;
+    for (int k = 0; k < taps; ++k) acc += w[k] * src[k][x];
+    dst[x] = acc;
+  }
+}
+
+#if defined(__x86_64__)
+__attribute__((target("avx2"))) void WeightedSumAvx2(float* __restrict dst, const float* const* src, const float* w,
+                                                     int taps, int lo, int hi) {
+  int x = lo;
+  for (; x + 8 <= hi; x += 8) {
+    __m256 acc = _mm256_setzero_ps();
+    for (int k = 0; k < taps; ++k) {
+      acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_set1_ps(w[k]), _mm256_loadu_ps(src[k] + x)));
+    }
+    _mm256_storeu_ps(dst + x, acc);
+  }
+  if (x < hi) {  // the last 1..7 cells: masked loads (nothing read past them) and a masked store
+    const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    const __m256i mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(hi - x), lanes);
+    __m256 acc = _mm256_setzero_ps();
+    for (int k = 0; k < taps; ++k) {
+      acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_set1_ps(w[k]), _mm256_maskload_ps(src[k] + x, mask)));
+    }
+    _mm256_maskstore_ps(dst + x, mask, acc);
+  }
+}
+#endif
+
+using WeightedSumFunction = void (*)(float* __restrict, const float* const*, const float*, int, int, int);
+
+// AVX2 when the CPU has it (decided once; the project is not built for a particular CPU).
+WeightedSumFunction BestWeightedSum() {
+#if defined(__x86_64__)
+  static const WeightedSumFunction best = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") ? &WeightedSumAvx2 : &WeightedSumPortable;
+  }();
+  return best;
+#else
+  return &WeightedSumPortable;
+#endif
+}
+
+void WeightedSum(float* __restrict dst, const float* const* src, const float* w, int taps, int lo, int hi) {
+  static const WeightedSumFunction best = BestWeightedSum();
+  best(dst, src, w, taps, lo, hi);
 }
 
 double MinDelta(double a, double b, double n) {
@@ -147,10 +214,14 @@ void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, con
 void PoseCellNetwork::ConvolveX(const std::vector<float>& in, const RowFlags& in_rows,
                                 std::vector<float>& out, RowFlags& out_rows,
                                 const std::vector<float>& w, const AxisSet& xs_out,
-                                const AxisSet& ys, const AxisSet& ts) const {
+                                const AxisSet& ys, const AxisSet& ts) {
   const int k_dim = static_cast<int>(w.size());
   const int c = k_dim / 2;
   const int n = dim_xy_;
+  // padded_row_[i] = src[(i - c) wrapped]: tap k of cell x reads padded_row_[x + k].
+  padded_row_.resize(static_cast<size_t>(n) + 2 * c);
+  const float* taps[kMaxTaps];
+  for (int k = 0; k < k_dim; ++k) taps[k] = padded_row_.data() + k;
   for (int t : ts.index) {
     for (int y : ys.index) {
       const RowExtent ein = in_rows[Row(y, t)];
@@ -163,23 +234,12 @@ void PoseCellNetwork::ConvolveX(const std::vector<float>& in, const RowFlags& in
       out_rows[Row(y, t)] = eout;
       const float* src = &in[Flat(0, y, t)];
       float* dst = &out[Flat(0, y, t)];
-      for (int k = 0; k < k_dim; ++k) {
-        const float wk = w[k];
-        const int shift = k - c;  // dst[x] += wk * src[x + shift], wrapped
-        for (auto [run_b, run_e] : xs_out.runs) {
-          const int b = std::max(run_b, eout.lo), e = std::min(run_e, eout.hi);
-          if (b >= e) continue;
-          // Split [b, e) where x + shift leaves [0, n), so the inner loops never wrap.
-          int lo = b;
-          if (lo + shift < 0) {
-            const int stop = std::min(e, -shift);
-            AddScaled(dst, src, wk, lo, stop, shift + n);
-            lo = stop;
-          }
-          const int mid_end = std::min(e, n - shift);
-          AddScaled(dst, src, wk, lo, mid_end, shift);
-          AddScaled(dst, src, wk, std::max(lo, mid_end), e, shift - n);
-        }
+      std::copy(src + n - c, src + n, padded_row_.begin());
+      std::copy(src, src + n, padded_row_.begin() + c);
+      std::copy(src, src + c, padded_row_.begin() + c + n);
+      for (auto [run_b, run_e] : xs_out.runs) {
+        const int b = std::max(run_b, eout.lo), e = std::min(run_e, eout.hi);
+        if (b < e) WeightedSum(dst, taps, w.data(), k_dim, b, e);
       }
     }
   }
@@ -192,10 +252,12 @@ void PoseCellNetwork::ConvolveY(const std::vector<float>& in, const RowFlags& in
                                 const AxisSet& ts) const {
   const int k_dim = static_cast<int>(w.size());
   const int c = k_dim / 2;
+  const float* taps[kMaxTaps];
+  float weights[kMaxTaps];
   for (int t : ts.index) {
     for (int y : ys_out.index) {
-      float* dst = &out[Flat(0, y, t)];
       RowExtent acc{dim_xy_, 0};
+      int count = 0;
       for (int k = 0; k < k_dim; ++k) {
         const int ys = Wrap(y + k - c, dim_xy_);
         if (!ys_in.member[ys]) continue;
@@ -203,11 +265,15 @@ void PoseCellNetwork::ConvolveY(const std::vector<float>& in, const RowFlags& in
         if (ein.empty()) continue;
         acc.lo = std::min(acc.lo, ein.lo);
         acc.hi = std::max(acc.hi, ein.hi);
-        // The source row is zero outside its extent, which lies inside xs: no need to walk
-        // xs's runs; widening to whole vectors only adds zeros.
-        AddScaled(dst, &in[Flat(0, ys, t)], w[k], ein.lo & ~3, std::min(dim_xy_, (ein.hi + 3) & ~3), 0);
+        taps[count] = &in[Flat(0, ys, t)];
+        weights[count++] = w[k];
       }
       out_rows[Row(y, t)] = acc.empty() ? RowExtent{} : acc;
+      // Source rows are zero outside their extents: over the hull of the extents (widened to
+      // whole vectors) the sum only adds zeros where a row has none.
+      if (count > 0) {
+        WeightedSum(&out[Flat(0, y, t)], taps, weights, count, acc.lo & ~3, std::min(dim_xy_, (acc.hi + 3) & ~3));
+      }
     }
   }
 }
@@ -219,24 +285,34 @@ void PoseCellNetwork::ConvolveTh(const std::vector<float>& in, const RowFlags& i
                                  const AxisSet& ts_out) const {
   const int k_dim = static_cast<int>(w.size());
   const int c = k_dim / 2;
+  const float* taps[kMaxTaps];
+  float weights[kMaxTaps];
+  int layers[kMaxTaps];
   for (int t : ts_out.index) {
-    for (int y : ys.index) out_rows[Row(y, t)] = RowExtent{dim_xy_, 0};
+    int layer_count = 0;
     for (int k = 0; k < k_dim; ++k) {
       const int tsrc = Wrap(t + k - c, dim_th_);
       if (!ts_in.member[tsrc]) continue;
-      const float wk = w[k];
-      for (int y : ys.index) {
-        const RowExtent ein = in_rows[Row(y, tsrc)];
-        if (ein.empty()) continue;
-        RowExtent& acc = out_rows[Row(y, t)];
-        acc.lo = std::min(acc.lo, ein.lo);
-        acc.hi = std::max(acc.hi, ein.hi);
-        AddScaled(&out[Flat(0, y, t)], &in[Flat(0, y, tsrc)], wk, ein.lo & ~3,
-                  std::min(dim_xy_, (ein.hi + 3) & ~3), 0);
-      }
+      layers[layer_count] = tsrc;
+      weights[layer_count++] = w[k];
     }
     for (int y : ys.index) {
-      if (out_rows[Row(y, t)].empty()) out_rows[Row(y, t)] = RowExtent{};
+      RowExtent acc{dim_xy_, 0};
+      int count = 0;
+      float row_weights[kMaxTaps];
+      for (int j = 0; j < layer_count; ++j) {
+        const RowExtent ein = in_rows[Row(y, layers[j])];
+        if (ein.empty()) continue;
+        acc.lo = std::min(acc.lo, ein.lo);
+        acc.hi = std::max(acc.hi, ein.hi);
+        taps[count] = &in[Flat(0, y, layers[j])];
+        row_weights[count++] = weights[j];
+      }
+      out_rows[Row(y, t)] = acc.empty() ? RowExtent{} : acc;
+      if (count > 0) {
+        WeightedSum(&out[Flat(0, y, t)], taps, row_weights, count, acc.lo & ~3,
+                    std::min(dim_xy_, (acc.hi + 3) & ~3));
+      }
     }
   }
 }
@@ -269,10 +345,10 @@ void PoseCellNetwork::ExciteInhibitNormalise() {
       const float* e = &buf_c_[Flat(0, y, t)];
       bool any = false;
       for (auto [b, end] : ex_xs_.runs) {
-        for (int x = b; x < end; ++x) {
-          const bool strong = e[x] >= global && e[x] > 0.0f;
+        for (int x = b; x < end; ++x) {  // branch-free: which cells pass is unpredictable
+          const uint8_t strong = static_cast<uint8_t>((e[x] >= global) & (e[x] > 0.0f));
           tmp_xs_.member[x] |= strong;
-          any |= strong;
+          any |= strong != 0;
         }
       }
       if (any) tmp_ys_.member[y] = tmp_ts_.member[t] = 1;

@@ -21,7 +21,10 @@
 //
 // Speed: activity is compact, so every pass runs only over the product of the active index sets
 // of x, y and theta (dilated by the kernel radius or the shift); buffers are preallocated and
-// kept zero outside the active region, so a step allocates nothing.
+// kept zero outside the active region, so a step allocates nothing. Each convolution pass
+// gathers all taps of an output row at once (AVX2 when the CPU has it, else SSE2), adding them
+// in the same order per cell as tap-by-tap passes would and without fused multiply-adds, so
+// every CPU computes the same floats.
 
 #include <cstdint>
 #include <utility>
@@ -189,9 +192,11 @@ class PoseCellNetwork {
     bool empty() const { return lo >= hi; }
   };
   using RowFlags = std::vector<RowExtent>;
+  // Kernel widths are at most the network's size (config); taps are gathered on the stack.
+  static constexpr int kMaxTaps = 1001;
   void ConvolveX(const std::vector<float>& in, const RowFlags& in_rows, std::vector<float>& out,
                  RowFlags& out_rows, const std::vector<float>& w, const AxisSet& xs_out,
-                 const AxisSet& ys, const AxisSet& ts) const;
+                 const AxisSet& ys, const AxisSet& ts);
   void ConvolveY(const std::vector<float>& in, const RowFlags& in_rows, std::vector<float>& out,
                  RowFlags& out_rows, const std::vector<float>& w, const AxisSet& xs,
                  const AxisSet& ys_in, const AxisSet& ys_out, const AxisSet& ts) const;
@@ -233,6 +238,7 @@ class PoseCellNetwork {
   uint64_t frames_processed_ = 0;
   uint64_t view_updates_ = 0;
   std::vector<double> avg_x_, avg_y_, avg_th_;  // population-vector sums, preallocated
+  std::vector<float> padded_row_;               // ConvolveX scratch: one row with wrapped margins
 };
 
 }  // namespace rslam::pose_cells
