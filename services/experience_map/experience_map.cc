@@ -8,7 +8,6 @@
 #include <queue>
 #include <stdexcept>
 #include <string>
-#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -225,20 +224,35 @@ void ExperienceMap::SeedLocalRegion(uint32_t a, uint32_t b) {
   local_region_.clear();
   const size_t limit = static_cast<size_t>(config_.exp_local_region_links);
   if (limit == 0) return;
-  std::unordered_set<uint32_t> seen_exp{a, b};
-  std::unordered_set<uint32_t> seen_link;
-  std::deque<uint32_t> queue{a, b};
-  while (!queue.empty() && local_region_.size() < limit) {
-    const uint32_t e = queue.front();
-    queue.pop_front();
+  // Breadth-first from a and b. "Seen" marks are stamps of this call in arrays kept between
+  // calls, so a seed (every frame that re-traverses or closes a link) allocates nothing.
+  seen_experience_.resize(experiences_.size(), 0);
+  seen_link_.resize(links_.size(), 0);
+  if (++seed_stamp_ == 0) {  // the stamps wrapped: forget every old mark
+    std::fill(seen_experience_.begin(), seen_experience_.end(), 0);
+    std::fill(seen_link_.begin(), seen_link_.end(), 0);
+    seed_stamp_ = 1;
+  }
+  seed_queue_.clear();
+  for (uint32_t e : {a, b}) {
+    if (seen_experience_[e] == seed_stamp_) continue;
+    seen_experience_[e] = seed_stamp_;
+    seed_queue_.push_back(e);
+  }
+  for (size_t head = 0; head < seed_queue_.size() && local_region_.size() < limit; ++head) {
+    const uint32_t e = seed_queue_[head];
     for (const auto* list : {&links_from_[e], &links_to_[e]}) {
       for (uint32_t li : *list) {
         if (local_region_.size() >= limit) break;
-        if (!seen_link.insert(li).second) continue;
+        if (seen_link_[li] == seed_stamp_) continue;
+        seen_link_[li] = seed_stamp_;
         local_region_.push_back(li);
         const Link& l = links_[li];
         const uint32_t other = l.from_id == e ? l.to_id : l.from_id;
-        if (seen_exp.insert(other).second) queue.push_back(other);
+        if (seen_experience_[other] != seed_stamp_) {
+          seen_experience_[other] = seed_stamp_;
+          seed_queue_.push_back(other);
+        }
       }
     }
   }

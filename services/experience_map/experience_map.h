@@ -24,7 +24,6 @@
 // exp_relax_budget_links = 0 restores OpenRatSLAM's behaviour.
 
 #include <cstdint>
-#include <deque>
 #include <vector>
 
 #include "services/experience_map/experience_action.h"
@@ -136,6 +135,12 @@ class ExperienceMap {
   uint32_t sweep_experience_ = 0;  // global sliced sweep position
   uint32_t sweep_link_ = 0;
   std::vector<uint32_t> local_region_;  // link indices, breadth-first from the latest closure
+  // SeedLocalRegion scratch (not state): per experience / link, the stamp of the last seed that
+  // reached it, and the breadth-first queue.
+  std::vector<uint32_t> seen_experience_;
+  std::vector<uint32_t> seen_link_;
+  uint32_t seed_stamp_ = 0;
+  std::vector<uint32_t> seed_queue_;
   uint64_t next_sequence_ = 0;
   double last_correction_ = 0.0;
 };
