@@ -12,12 +12,19 @@
 // Each frame's boundary points are registered to the key frame's by point-to-line ICP in the
 // plane (x forward, y left, theta counter-clockwise): nearest key point within
 // max_pair_distance_m, the line through it and its profile neighbours, Gauss-Newton on
-// (x, y, theta). The key frame is replaced once the robot has moved keyframe_translation_m or
+// (x, y, theta), pairs weighted by 1 / (r_a r_b)^2 (a row's floor footprint grows with r^2), with
+// priors that keep the robot from moving sideways and the turn near the prior's. ICP starts from
+// up to three seeds (the prior, the previous frame's motion, the last forward step with the
+// prior's turn) and keeps the closest fit (unless it pairs up clearly fewer points). The key frame is replaced once the robot has moved keyframe_translation_m or
 // turned keyframe_rotation_rad from it, or when a frame cannot be registered, so per-frame pixel
 // noise does not accumulate over a straight move: the distance travelled from a key frame is one
 // registration, not the sum of many small ones.
 //
-// A frame is not registered (the caller's prior motion is returned, measured = false) when
+// The caller's prior says whether the robot moves forward (the column profiles see that well, but
+// not how fast): while it does, the forward step seeded into the registration, and returned when a
+// frame cannot be registered, is the last registered forward step of a moving frame (constant
+// velocity) if that is at most coast_frames old, else the prior's own.
+// A frame is not registered (the seeded prior is returned, measured = false) when
 // either frame has fewer than min_points points, too few pairs survive, or the geometry leaves a
 // direction unconstrained (a corridor's parallel walls say nothing about motion along them):
 // smallest eigenvalue of the normal matrix per pair below min_constraint.
@@ -41,6 +48,7 @@ struct FloorOdometryConfig {
   double keyframe_rotation_rad = 0.35;  // ... or this much turn
   int iterations = 12;
   double min_constraint = 0.02;         // smallest normal-matrix eigenvalue per pair (see above)
+  int coast_frames = 50;                // constant velocity for at most this many frames
 
   template <class V>
   void VisitFields(V& v) {
@@ -52,6 +60,8 @@ struct FloorOdometryConfig {
     v("iterations", iterations, "ICP iterations per frame");
     v("min_constraint", min_constraint,
       "smallest eigenvalue of the ICP normal matrix per pair; below it the frame is not registered");
+    v("coast_frames", coast_frames,
+      "while the prior says the robot moves, reuse the last registered forward step for this many frames");
   }
   void Validate() const {
     Require(max_range_m > 0 && max_range_m < 100, "max_range_m", "must be in (0, 100)");
@@ -61,6 +71,7 @@ struct FloorOdometryConfig {
     Require(keyframe_rotation_rad > 0 && keyframe_rotation_rad < 3.14, "keyframe_rotation_rad", "must be in (0, pi)");
     Require(iterations >= 1 && iterations <= 100, "iterations", "must be 1..100");
     Require(min_constraint >= 0, "min_constraint", "must be >= 0");
+    Require(coast_frames >= 0, "coast_frames", "must be >= 0");
   }
 };
 
@@ -89,14 +100,25 @@ class FloorOdometry {
   const FloorOdometryConfig& config() const { return config_; }
 
  private:
+  struct Registration {
+    bool ok = false;
+    Eigen::Vector3d pose = Eigen::Vector3d::Zero();  // robot in the key frame
+    int pairs = 0;
+    double mean_residual2 = 0.0;  // weighted mean squared point-to-line distance (m^2)
+  };
   void MakeKeyFrame(std::vector<Eigen::Vector2d>&& points);
+  // ICP from the predicted pose of the robot in the key frame.
+  Registration Register(const std::vector<Eigen::Vector2d>& points, const Eigen::Vector3d& predicted) const;
 
   const FloorOdometryConfig config_;
   bool has_key_ = false;
   std::vector<Eigen::Vector2d> key_points_;
   std::vector<Eigen::Vector2d> key_normals_;  // unit normal of the boundary line at each key point
   Eigen::Vector3d key_to_robot_ = Eigen::Vector3d::Zero();  // robot pose in the key frame (x, y, theta)
-  std::vector<Eigen::Vector2d> scratch_;
+  PlanarMotion last_motion_;     // the previous frame's, when it was registered
+  bool last_registered_ = false;
+  double last_moving_dx_ = 0.0;  // last registered forward step of a frame the prior said moves
+  int frames_since_moving_dx_ = -1;  // -1: none yet
 };
 
 }  // namespace rslam::odometry
