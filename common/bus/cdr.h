@@ -132,11 +132,20 @@ class CdrReader {
     requires std::is_arithmetic_v<T> && (!std::is_same_v<T, bool>)
   void ReadPrimitiveSequence(std::vector<T>& v) {
     const uint32_t n = ReadCount(sizeof(T));
-    v.resize(n);
-    if (n == 0) return;
+    if (n == 0) {
+      v.clear();
+      return;
+    }
     Align(sizeof(T));
     Need(std::size_t{n} * sizeof(T));
-    std::memcpy(v.data(), data_.data() + pos_, std::size_t{n} * sizeof(T));
+    if constexpr (sizeof(T) == 1) {
+      // Bytes (images) in one pass, without zero-filling first.
+      const auto* p = reinterpret_cast<const T*>(data_.data() + pos_);
+      v.assign(p, p + n);
+    } else {
+      v.resize(n);
+      std::memcpy(v.data(), data_.data() + pos_, std::size_t{n} * sizeof(T));
+    }
     if (swap_)
       for (auto& x : v) x = ByteSwap(x);
     pos_ += std::size_t{n} * sizeof(T);

@@ -64,11 +64,25 @@ void ComputeKeyHash(RawSerdata* d, const RawSertype* type) {
   d->base.hash = HashKey(d->keyhash) ^ type->base.serdata_basehash;
 }
 
+std::size_t PaddedSize(std::size_t size) { return (size + 3) & ~std::size_t{3}; }
+
+// An empty serdata with room for size bytes; the caller appends them, then calls Pad. (Images
+// make every pass over the bytes count: no zero-filling of what is overwritten at once.)
 RawSerdata* NewSerdata(const ddsi_sertype* type, ddsi_serdata_kind kind, std::size_t size) {
   auto* d = new RawSerdata();
   ddsi_serdata_init(&d->base, type, kind);
   d->size = static_cast<uint32_t>(size);
-  d->bytes.assign((size + 3) & ~std::size_t{3}, 0);
+  d->bytes.reserve(PaddedSize(size));
+  return d;
+}
+
+// Zero padding to a multiple of 4 (and zeros for anything the source did not cover).
+void Pad(RawSerdata* d) { d->bytes.resize(PaddedSize(d->size)); }
+
+RawSerdata* NewSerdataFrom(const ddsi_sertype* type, ddsi_serdata_kind kind, std::span<const uint8_t> bytes) {
+  RawSerdata* d = NewSerdata(type, kind, bytes.size());
+  d->bytes.assign(bytes.begin(), bytes.end());
+  Pad(d);
   return d;
 }
 
@@ -98,28 +112,27 @@ uint32_t SerdataSize(const ddsi_serdata* d) { return AsRaw(d)->size; }
 ddsi_serdata* SerdataFromSer(const ddsi_sertype* type, ddsi_serdata_kind kind, const nn_rdata* fragchain,
                              size_t size) {
   RawSerdata* d = NewSerdata(type, kind, size);
+  // The fragments come in order and may overlap: append the part of each beyond what we have.
   uint32_t off = 0;
-  while (fragchain != nullptr) {
-    if (fragchain->maxp1 > off) {
-      const unsigned char* payload = NN_RMSG_PAYLOADOFF(fragchain->rmsg, NN_RDATA_PAYLOAD_OFF(fragchain));
-      const uint32_t n = std::min<uint32_t>(fragchain->maxp1, static_cast<uint32_t>(size)) - off;
-      std::memcpy(d->bytes.data() + off, payload + off - fragchain->min, n);
-      off = fragchain->maxp1;
-    }
-    fragchain = fragchain->nextfrag;
+  for (; fragchain != nullptr; fragchain = fragchain->nextfrag) {
+    const uint32_t end = std::min<uint32_t>(fragchain->maxp1, static_cast<uint32_t>(size));
+    if (end <= off) continue;
+    const unsigned char* payload = NN_RMSG_PAYLOADOFF(fragchain->rmsg, NN_RDATA_PAYLOAD_OFF(fragchain));
+    d->bytes.insert(d->bytes.end(), payload + (off - fragchain->min), payload + (end - fragchain->min));
+    off = end;
   }
+  Pad(d);
   return Finish(d, type);
 }
 
 ddsi_serdata* SerdataFromSerIov(const ddsi_sertype* type, ddsi_serdata_kind kind, ddsrt_msg_iovlen_t niov,
                                 const ddsrt_iovec_t* iov, size_t size) {
   RawSerdata* d = NewSerdata(type, kind, size);
-  std::size_t off = 0;
-  for (ddsrt_msg_iovlen_t i = 0; i < niov && off < size; ++i) {
-    const std::size_t n = std::min<std::size_t>(iov[i].iov_len, size - off);
-    std::memcpy(d->bytes.data() + off, iov[i].iov_base, n);
-    off += n;
+  for (ddsrt_msg_iovlen_t i = 0; i < niov && d->bytes.size() < size; ++i) {
+    const auto* base = static_cast<const uint8_t*>(iov[i].iov_base);
+    d->bytes.insert(d->bytes.end(), base, base + std::min<std::size_t>(iov[i].iov_len, size - d->bytes.size()));
   }
+  Pad(d);
   return Finish(d, type);
 }
 
@@ -132,8 +145,7 @@ ddsi_serdata* SerdataFromKeyhash(const ddsi_sertype* type, const ddsi_keyhash* k
 
 ddsi_serdata* SerdataFromSample(const ddsi_sertype* type, ddsi_serdata_kind kind, const void* sample) {
   const auto* s = static_cast<const CycloneSample*>(sample);
-  RawSerdata* d = NewSerdata(type, kind, s->cdr.size());
-  std::copy(s->cdr.begin(), s->cdr.end(), d->bytes.begin());
+  RawSerdata* d = NewSerdataFrom(type, kind, s->cdr);
   try {
     ComputeKeyHash(d, AsRawType(type));
   } catch (const CdrError&) {
@@ -322,8 +334,7 @@ class CycloneWriter final : public RawWriter {
   ~CycloneWriter() override { dds_delete(writer_); }
 
   void Write(std::span<const uint8_t> cdr) override {
-    RawSerdata* d = NewSerdata(type_, SDK_DATA, cdr.size());
-    std::memcpy(d->bytes.data(), cdr.data(), cdr.size());
+    RawSerdata* d = NewSerdataFrom(type_, SDK_DATA, cdr);
     try {
       ComputeKeyHash(d, AsRawType(type_));
     } catch (const CdrError& e) {
@@ -381,9 +392,16 @@ class CycloneReader final : public RawReader {
       if (n <= 0) break;
       for (int i = 0; i < n; ++i) {
         if (infos[i].valid_data) {
-          const RawSerdata* r = AsRaw(batch[i]);
+          RawSerdata* r = AsRaw(batch[i]);
           RawSample sample;
-          sample.cdr.assign(r->bytes.begin(), r->bytes.begin() + r->size);
+          // Our reference is the last one (no other reader of this process holds the sample):
+          // hand its bytes over instead of copying them. Nobody can take a new reference now.
+          if (ddsrt_atomic_ld32(&batch[i]->refc) == 1) {
+            sample.cdr = std::move(r->bytes);
+            sample.cdr.resize(r->size);
+          } else {
+            sample.cdr.assign(r->bytes.begin(), r->bytes.begin() + r->size);
+          }
           sample.source_timestamp_ns = infos[i].source_timestamp;
           out.push_back(std::move(sample));
           ++taken;
