@@ -1,6 +1,7 @@
 #include "services/odometry/visual_odometry.h"
 
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -177,26 +178,37 @@ void VisualOdometry::Reset() {
   image_size_ = cv::Size(0, 0);
 }
 
-void VisualOdometry::CheckImage(const cv::Mat& grey) const {
-  if (grey.empty()) throw std::invalid_argument("VisualOdometry: empty image");
-  if (grey.type() != CV_8UC1) {
-    throw std::invalid_argument("VisualOdometry: image must be CV_8UC1 (grey), got type " +
-                                std::to_string(grey.type()));
+void VisualOdometry::CheckImage(const cv::Mat& image) const {
+  if (image.empty()) throw std::invalid_argument("VisualOdometry: empty image");
+  if (image.type() != CV_8UC1 && image.type() != CV_8UC3 && image.type() != CV_8UC4) {
+    throw std::invalid_argument("VisualOdometry: image must be CV_8UC1 (grey), CV_8UC3 (BGR) or CV_8UC4 (BGRA), got type " +
+                                std::to_string(image.type()));
   }
-  if (has_previous_ && grey.size() != image_size_) {
+  if (has_previous_ && image.size() != image_size_) {
     throw std::invalid_argument("VisualOdometry: image size changed from " + std::to_string(image_size_.width) +
                                 "x" + std::to_string(image_size_.height) + " to " +
-                                std::to_string(grey.cols) + "x" + std::to_string(grey.rows));
+                                std::to_string(image.cols) + "x" + std::to_string(image.rows));
   }
 }
 
-Velocity VisualOdometry::Update(const cv::Mat& grey, double dt_s) {
-  CheckImage(grey);
+void VisualOdometry::CropProfile(const cv::Mat& image, const cv::Rect& crop, std::vector<float>& profile) {
+  if (image.channels() == 1) {
+    ColumnIntensityProfile(image, crop, profile);
+    return;
+  }
+  // Grey conversion is per pixel, so converting only the crop gives the crop of the converted
+  // frame, bit for bit, at a fraction of the cost.
+  cv::cvtColor(image(crop), crop_grey_, image.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+  ColumnIntensityProfile(crop_grey_, cv::Rect(0, 0, crop.width, crop.height), profile);
+}
+
+Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
+  CheckImage(image);
   if (!std::isfinite(dt_s) || dt_s <= 0.0) {
     throw std::invalid_argument("VisualOdometry: dt must be finite and > 0, got " + std::to_string(dt_s));
   }
   if (!has_previous_) {
-    const cv::Size size = grey.size();
+    const cv::Size size = image.size();
     const cv::Rect vtrans_crop = ResolveCrop(config_.vtrans_image_x_min, config_.vtrans_image_x_max,
                                              config_.vtrans_image_y_min, config_.vtrans_image_y_max, size, "vtrans");
     const cv::Rect vrot_crop = ResolveCrop(config_.vrot_image_x_min, config_.vrot_image_x_max,
@@ -210,14 +222,14 @@ Velocity VisualOdometry::Update(const cv::Mat& grey, double dt_s) {
     image_size_ = size;
     vtrans_crop_ = vtrans_crop;
     vrot_crop_ = vrot_crop;
-    ColumnIntensityProfile(grey, vtrans_crop_, vtrans_previous_);
-    ColumnIntensityProfile(grey, vrot_crop_, vrot_previous_);
+    CropProfile(image, vtrans_crop_, vtrans_previous_);
+    CropProfile(image, vrot_crop_, vrot_previous_);
     has_previous_ = true;
     return Velocity{};
   }
 
-  ColumnIntensityProfile(grey, vtrans_crop_, vtrans_profile_);
-  ColumnIntensityProfile(grey, vrot_crop_, vrot_profile_);
+  CropProfile(image, vtrans_crop_, vtrans_profile_);
+  CropProfile(image, vrot_crop_, vrot_profile_);
   const ProfileMatch rotation =
       BestProfileShift(vrot_profile_, vrot_previous_, config_.max_shift_px, config_.min_overlap_px,
                        config_.normalise_profile_brightness);

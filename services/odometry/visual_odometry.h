@@ -34,7 +34,7 @@
 // as soon as its running sum shows it cannot beat the best so far (the result is the same
 // argmin; f of the winner is always complete). About 10-20 us a frame at St Lucia settings.
 //
-// Bad input (empty image, not CV_8UC1, size change mid-stream, crop outside the image, dt not
+// Bad input (empty image, not CV_8UC1/3/4, size change mid-stream, crop outside the image, dt not
 // finite or <= 0) throws std::invalid_argument with the reason; the state is left unchanged.
 
 #include <opencv2/core.hpp>
@@ -80,9 +80,11 @@ class VisualOdometry {
   VisualOdometry(VisualOdometry&&) = default;
 
   // Velocity between the previous frame and this one; the first frame (and the first after
-  // Reset) returns zero. grey: CV_8UC1, the same size every frame. dt_s: time since the
-  // previous frame, finite and > 0 (ignored for the first frame but still checked).
-  Velocity Update(const cv::Mat& grey, double dt_s);
+  // Reset) returns zero. image: CV_8UC1 grey, or CV_8UC3 BGR / CV_8UC4 BGRA, the same size every
+  // frame; a colour frame gives exactly what its cv::COLOR_BGR(A)2GRAY conversion gives, but
+  // only the two crops are converted (about a third of a 640x480 St Lucia frame). dt_s: time
+  // since the previous frame, finite and > 0 (ignored for the first frame but still checked).
+  Velocity Update(const cv::Mat& image, double dt_s);
 
   // Forgets the previous frame and the image size (e.g. after a camera change).
   void Reset();
@@ -90,7 +92,9 @@ class VisualOdometry {
   const VisualOdometryConfig& config() const { return config_; }
 
  private:
-  void CheckImage(const cv::Mat& grey) const;
+  void CheckImage(const cv::Mat& image) const;
+  // The crop's column-intensity profile, converting only the crop of a colour image.
+  void CropProfile(const cv::Mat& image, const cv::Rect& crop, std::vector<float>& profile);
 
   const VisualOdometryConfig config_;
   cv::Size image_size_{0, 0};  // fixed by the first frame
@@ -99,6 +103,7 @@ class VisualOdometry {
   bool has_previous_ = false;
   std::vector<float> vtrans_profile_, vtrans_previous_;
   std::vector<float> vrot_profile_, vrot_previous_;
+  cv::Mat crop_grey_;  // a colour frame's crop converted to grey (reused from frame to frame)
 };
 
 }  // namespace rslam::odometry

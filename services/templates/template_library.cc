@@ -337,8 +337,8 @@ double TemplateLibrary::ShiftToAngle(int shift) const {
   return shift * (config_.crop_fov_deg * std::numbers::pi / 180.0) / width_;
 }
 
-ViewMatch TemplateLibrary::MatchOrLearn(const cv::Mat& grey) {
-  encoder_.Encode(grey, scratch_);
+ViewMatch TemplateLibrary::MatchOrLearn(const cv::Mat& image) {
+  encoder_.Encode(image, scratch_);
   if (size() == 0) return {Store(scratch_), true, 0.0, kInfinity};
   if (histogram_mode_) {
     double best_divergence = kInfinity;
@@ -356,14 +356,14 @@ ViewMatch TemplateLibrary::MatchOrLearn(const cv::Mat& grey) {
   return {search_hint_, true, 0.0, best.difference};
 }
 
-uint32_t TemplateLibrary::Learn(const cv::Mat& grey) {
-  encoder_.Encode(grey, scratch_);
+uint32_t TemplateLibrary::Learn(const cv::Mat& image) {
+  encoder_.Encode(image, scratch_);
   return Store(scratch_);
 }
 
-std::vector<double> TemplateLibrary::Differences(const cv::Mat& grey) const {
+std::vector<double> TemplateLibrary::Differences(const cv::Mat& image) const {
   EncodedView view;
-  encoder_.Encode(grey, view);
+  encoder_.Encode(image, view);
   std::vector<double> differences(size());
   if (histogram_mode_) {
     const int bins = encoder_.histogram_bins();

@@ -69,12 +69,15 @@ class TemplateLibrary {
   TemplateLibrary& operator=(const TemplateLibrary&) = delete;
   TemplateLibrary(TemplateLibrary&&) = default;
 
+  // Images: CV_8UC1 grey, or CV_8UC3 BGR / CV_8UC4 BGRA of which only the crop is converted to
+  // grey (exactly what converting the whole frame with cv::COLOR_BGR(A)2GRAY first would give).
+  //
   // Matches the view against every template; learns it when nothing is close enough.
-  ViewMatch MatchOrLearn(const cv::Mat& grey);
+  ViewMatch MatchOrLearn(const cv::Mat& image);
   // Always stores the view as a new template; returns its id (ids are 0..N-1 in learning order).
-  uint32_t Learn(const cv::Mat& grey);
+  uint32_t Learn(const cv::Mat& image);
   // Difference of the view to every template (index = id), exact (no prefilter), no learning.
-  std::vector<double> Differences(const cv::Mat& grey) const;
+  std::vector<double> Differences(const cv::Mat& image) const;
 
   std::size_t size() const { return means_.size(); }
   const TemplateConfig& config() const { return config_; }

@@ -27,11 +27,13 @@ std::string Describe(const TemplateConfig& c) {
   return os.str();
 }
 
-// Rounds half away from zero, as std::lround, without the library call.
+// Clamps to [0, 1], scales to 0..255 and rounds half away from zero (as std::lround), without
+// the library call or branches (after normalisation many values clip, and the rounding
+// direction is a coin toss: both would mispredict).
 uint8_t Quantise(float v) {
-  const float scaled = std::clamp(v, 0.0f, 1.0f) * 255.0f;
+  const float scaled = std::min(std::max(v, 0.0f), 1.0f) * 255.0f;
   const int whole = static_cast<int>(scaled);
-  return static_cast<uint8_t>(scaled - static_cast<float>(whole) >= 0.5f ? whole + 1 : whole);
+  return static_cast<uint8_t>(whole + static_cast<int>(scaled - static_cast<float>(whole) >= 0.5f));
 }
 
 }  // namespace
@@ -62,27 +64,34 @@ void ViewEncoder::Shrink(const cv::Mat& crop, cv::Mat& out) const {
   }
 }
 
-cv::Rect ViewEncoder::ResolveCrop(const cv::Mat& grey) const {
-  if (grey.empty()) throw std::invalid_argument("TemplateLibrary: empty image");
-  if (grey.type() != CV_8UC1) {
-    throw std::invalid_argument("TemplateLibrary: image must be CV_8UC1 (grey), got type " +
-                                std::to_string(grey.type()));
+cv::Rect ViewEncoder::ResolveCrop(const cv::Mat& image) const {
+  if (image.empty()) throw std::invalid_argument("TemplateLibrary: empty image");
+  if (image.type() != CV_8UC1 && image.type() != CV_8UC3 && image.type() != CV_8UC4) {
+    throw std::invalid_argument("TemplateLibrary: image must be CV_8UC1 (grey), CV_8UC3 (BGR) or CV_8UC4 (BGRA), got type " +
+                                std::to_string(image.type()));
   }
-  const int x_end = config_.image_crop_x_max == -1 ? grey.cols : config_.image_crop_x_max;
-  const int y_end = config_.image_crop_y_max == -1 ? grey.rows : config_.image_crop_y_max;
-  if (x_end > grey.cols || y_end > grey.rows || config_.image_crop_x_min >= x_end ||
+  const int x_end = config_.image_crop_x_max == -1 ? image.cols : config_.image_crop_x_max;
+  const int y_end = config_.image_crop_y_max == -1 ? image.rows : config_.image_crop_y_max;
+  if (x_end > image.cols || y_end > image.rows || config_.image_crop_x_min >= x_end ||
       config_.image_crop_y_min >= y_end) {
     throw std::invalid_argument("TemplateLibrary: crop x [" + std::to_string(config_.image_crop_x_min) + ", " +
                                 std::to_string(x_end) + ") y [" + std::to_string(config_.image_crop_y_min) + ", " +
-                                std::to_string(y_end) + ") does not fit the " + std::to_string(grey.cols) + "x" +
-                                std::to_string(grey.rows) + " image");
+                                std::to_string(y_end) + ") does not fit the " + std::to_string(image.cols) + "x" +
+                                std::to_string(image.rows) + " image");
   }
   return cv::Rect(config_.image_crop_x_min, config_.image_crop_y_min, x_end - config_.image_crop_x_min,
                   y_end - config_.image_crop_y_min);
 }
 
-void ViewEncoder::Encode(const cv::Mat& grey, EncodedView& out) const {
-  const cv::Mat crop = grey(ResolveCrop(grey));
+void ViewEncoder::Encode(const cv::Mat& image, EncodedView& out) const {
+  cv::Mat crop = image(ResolveCrop(image));
+  if (crop.channels() != 1) {
+    // Grey conversion is per pixel: converting only the crop gives the crop of the converted
+    // frame, bit for bit.
+    cv::Mat grey_crop;
+    cv::cvtColor(crop, grey_crop, crop.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+    crop = grey_crop;
+  }
   if (crop.cols < width_ || crop.rows < height_) {
     throw std::invalid_argument("TemplateLibrary: the " + std::to_string(crop.cols) + "x" + std::to_string(crop.rows) +
                                 " crop is smaller than the " + std::to_string(width_) + "x" + std::to_string(height_) +

@@ -35,14 +35,16 @@ class ViewEncoder {
   int height() const { return height_; }
   int histogram_bins() const { return histogram_bins_; }
 
-  // Throws std::invalid_argument for an empty or non-CV_8UC1 image or one smaller than the crop.
-  void Encode(const cv::Mat& grey, EncodedView& out) const;
+  // image: CV_8UC1 grey, or CV_8UC3 BGR / CV_8UC4 BGRA, of which only the crop is converted
+  // (exactly as cv::COLOR_BGR(A)2GRAY converts the whole frame). Throws std::invalid_argument
+  // for an empty image, another type, or one smaller than the crop.
+  void Encode(const cv::Mat& image, EncodedView& out) const;
 
   // The preprocessing settings as text; equal strings mean comparable templates.
   const std::string& description() const { return description_; }
 
  private:
-  cv::Rect ResolveCrop(const cv::Mat& grey) const;
+  cv::Rect ResolveCrop(const cv::Mat& image) const;
   void EncodeGrid(const cv::Mat& crop, EncodedView& out) const;
   void EncodeHistogram(const cv::Mat& crop, EncodedView& out) const;
   static std::optional<AreaShrink> FixedShrink(const TemplateConfig& config, int width, int height);

@@ -219,10 +219,36 @@ TEST(VisualOdometryTest, TurningOnTheSpotReadsAsNoForwardMotionWhenConfigured) {
   EXPECT_DOUBLE_EQ(below.Update(after, kDt).vtrans, turning.vtrans);
 }
 
+// Colour frames are converted crop by crop; the velocities must be those of the whole frame
+// converted to grey first (as the services and `rslam run` do).
+TEST(VisualOdometryTest, ColourFramesGiveTheVelocitiesOfTheirGreyConversion) {
+  cv::RNG rng(23);
+  cv::Mat coarse(62, 102, CV_8UC3);
+  rng.fill(coarse, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat wide;
+  cv::resize(coarse, wide, cv::Size(816, 496), 0, 0, cv::INTER_CUBIC);
+  for (const int code : {-1, static_cast<int>(cv::COLOR_BGR2BGRA)}) {
+    VisualOdometry colour(VisualOdometryConfig{}), grey(VisualOdometryConfig{});
+    for (int i = 0; i < 12; ++i) {
+      cv::Mat frame = wide(cv::Rect(8 * i + (i % 3), 8 + i % 5, 640, 480)).clone();
+      if (code >= 0) cv::cvtColor(frame, frame, code);
+      cv::Mat converted;
+      cv::cvtColor(frame, converted, frame.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+      const Velocity a = colour.Update(frame, kDt);
+      const Velocity b = grey.Update(converted, kDt);
+      EXPECT_EQ(a.rotation_shift_px, b.rotation_shift_px) << i;
+      EXPECT_EQ(a.vrot, b.vrot) << i;
+      EXPECT_EQ(a.vtrans, b.vtrans) << i;
+      EXPECT_EQ(a.speed_difference, b.speed_difference) << i;
+    }
+  }
+}
+
 TEST(VisualOdometryTest, RejectsBadImagesAndDt) {
   VisualOdometry vo(VisualOdometryConfig{});
   EXPECT_THROW(vo.Update(cv::Mat(), kDt), std::invalid_argument);
-  EXPECT_THROW(vo.Update(cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(0)), kDt), std::invalid_argument);
+  EXPECT_THROW(vo.Update(cv::Mat(480, 640, CV_32FC1, cv::Scalar::all(0)), kDt), std::invalid_argument);
+  EXPECT_THROW(vo.Update(cv::Mat(480, 640, CV_8UC2, cv::Scalar::all(0)), kDt), std::invalid_argument);
   EXPECT_THROW(vo.Update(cv::Mat(100, 100, CV_8UC1, cv::Scalar(0)), kDt), std::invalid_argument);  // crop outside
   const cv::Mat scene = Texture(640, 480, 7);
   for (double dt : {0.0, -0.1, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {

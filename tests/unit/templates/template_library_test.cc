@@ -228,10 +228,46 @@ TEST(TemplateLibraryTest, InconsistentStateIsRefused) {
   EXPECT_TRUE(refused(good, looser).empty());
 }
 
+// Colour frames are converted crop only; matching must be that of the whole frame converted
+// to grey first (as the services and `rslam run` do).
+TEST(TemplateLibraryTest, ColourFramesMatchAsTheirGreyConversion) {
+  cv::RNG rng(31);
+  std::vector<cv::Mat> colour;
+  for (int i = 0; i < 6; ++i) {
+    cv::Mat coarse(50, 66, CV_8UC3);
+    rng.fill(coarse, cv::RNG::UNIFORM, 0, 256);
+    cv::Mat frame;
+    cv::resize(coarse, frame, cv::Size(640, 480), 0, 0, cv::INTER_CUBIC);
+    colour.push_back(frame);
+  }
+  auto grey = [](const cv::Mat& bgr) {
+    cv::Mat g;
+    cv::cvtColor(bgr, g, cv::COLOR_BGR2GRAY);
+    return g;
+  };
+  TemplateLibrary from_colour(StLucia()), from_grey(StLucia());
+  for (int i = 0; i < 4; ++i) {
+    from_colour.Learn(colour[i]);
+    from_grey.Learn(grey(colour[i]));
+  }
+  EXPECT_EQ(from_colour.ToProto().SerializeAsString(), from_grey.ToProto().SerializeAsString());
+  cv::Mat bgra;
+  cv::cvtColor(colour[2], bgra, cv::COLOR_BGR2BGRA);
+  EXPECT_EQ(from_colour.Differences(bgra), from_grey.Differences(grey(colour[2])));
+  for (int i = 0; i < 6; ++i) {
+    const ViewMatch a = from_colour.MatchOrLearn(colour[i]);
+    const ViewMatch b = from_grey.MatchOrLearn(grey(colour[i]));
+    EXPECT_EQ(a.template_id, b.template_id) << i;
+    EXPECT_EQ(a.is_new, b.is_new) << i;
+    EXPECT_EQ(a.difference, b.difference) << i;
+  }
+}
+
 TEST(TemplateLibraryTest, BadImagesAreRejectedWithAReason) {
   TemplateLibrary library(StLucia());
   EXPECT_THROW(library.MatchOrLearn(cv::Mat()), std::invalid_argument);
-  EXPECT_THROW(library.MatchOrLearn(cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(9))), std::invalid_argument);
+  EXPECT_THROW(library.MatchOrLearn(cv::Mat(480, 640, CV_8UC2, cv::Scalar::all(9))), std::invalid_argument);
+  EXPECT_THROW(library.MatchOrLearn(cv::Mat(480, 640, CV_16UC3, cv::Scalar::all(9))), std::invalid_argument);
   EXPECT_THROW(library.Learn(cv::Mat(480, 640, CV_32FC1, cv::Scalar(0))), std::invalid_argument);
   try {
     library.Differences(cv::Mat(200, 300, CV_8UC1, cv::Scalar(0)));  // smaller than the crop
