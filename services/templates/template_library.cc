@@ -277,21 +277,47 @@ TemplateLibrary::Best TemplateLibrary::BestGridMatch(const PreparedView& view, b
   return best;
 }
 
-double TemplateLibrary::RotationDifference(const EncodedView& view, uint32_t id, int& best_rotation) const {
-  const uint8_t* tmpl = pixels_.data() + static_cast<std::size_t>(id) * template_size_;
+namespace {
+
+// Column-major copy of a width x height image, each column zero-padded to `stride` bytes, the
+// columns repeated `copies` times one after the other (kWindowSadPadding zero bytes follow).
+void ColumnsOf(const uint8_t* pixels, int width, int height, int stride, int copies, std::vector<uint8_t>& out) {
+  out.assign(static_cast<std::size_t>(width) * copies * stride + kWindowSadPadding, 0);
+  for (int c = 0; c < width * copies; ++c) {
+    uint8_t* column = out.data() + static_cast<std::size_t>(c) * stride;
+    const int x = c % width;
+    for (int y = 0; y < height; ++y) column[y] = pixels[static_cast<std::size_t>(y) * width + x];
+  }
+}
+
+}  // namespace
+
+double TemplateLibrary::RotationDifference(const std::vector<uint8_t>& view_columns, uint32_t id,
+                                           int& best_rotation) const {
+  // Rotating the template by r: view column x shows what template column x - r showed. The dead
+  // zone is fixed to the camera, so it is masked at x in the view and at x - r in the template.
+  // With the template's columns twice over in column-major order, rotation r compares the view
+  // with one contiguous run (from column width - r): one SAD over all columns, minus the pairs a
+  // dead column takes part in (few). Exact integers, so the same sums as column by column.
+  const int stride = (height_ + 15) / 16 * 16;
+  std::vector<uint8_t> template_columns;
+  ColumnsOf(pixels_.data() + static_cast<std::size_t>(id) * template_size_, width_, height_, stride, 2,
+            template_columns);
+  auto column_sad = [&](int x, int tx) {
+    return window_sad_(view_columns.data() + static_cast<std::size_t>(x) * stride, stride,
+                       template_columns.data() + static_cast<std::size_t>(tx) * stride, stride, stride, 1,
+                       std::numeric_limits<uint64_t>::max());
+  };
   double best = kInfinity;
   for (int r = 0; r < width_; ++r) {
-    // Rotating the template by r: view column x shows what template column x - r showed. The
-    // dead zone is fixed to the camera, so it is masked at x in the view and at x - r in the template.
-    uint64_t sad = 0;
-    int columns = 0;
+    uint64_t sad = window_sad_(view_columns.data(), 0, template_columns.data() + static_cast<std::size_t>(width_ - r) * stride,
+                               0, width_ * stride, 1, std::numeric_limits<uint64_t>::max());
+    int columns = width_;
     for (int x = 0; x < width_; ++x) {
       const int tx = (x - r + width_) % width_;
-      if (dead_column_[x] || dead_column_[tx]) continue;
-      ++columns;
-      for (int y = 0; y < height_; ++y) {
-        sad += static_cast<uint64_t>(std::abs(int(view.pixels[static_cast<std::size_t>(y) * width_ + x]) -
-                                              int(tmpl[static_cast<std::size_t>(y) * width_ + tx])));
+      if (dead_column_[x] || dead_column_[tx]) {
+        sad -= column_sad(x, tx);
+        --columns;
       }
     }
     if (columns == 0) continue;
@@ -320,9 +346,11 @@ TemplateLibrary::Best TemplateLibrary::BestHistogramMatch(const EncodedView& vie
   std::partial_sort(candidates.begin(), candidates.begin() + keep, candidates.end());
   Best best;
   double best_rotation_difference = kInfinity;
+  std::vector<uint8_t> view_columns;
+  if (keep > 0) ColumnsOf(view.pixels.data(), width_, height_, (height_ + 15) / 16 * 16, 1, view_columns);
   for (std::size_t i = 0; i < keep; ++i) {
     int rotation = 0;
-    const double difference = RotationDifference(view, candidates[i].second, rotation);
+    const double difference = RotationDifference(view_columns, candidates[i].second, rotation);
     if (difference < best_rotation_difference) {
       best_rotation_difference = difference;
       best = {candidates[i].second, rotation, candidates[i].first, true};

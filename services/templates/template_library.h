@@ -122,7 +122,8 @@ class TemplateLibrary {
                             double* lower_bound = nullptr) const;
   Best BestGridMatch(const PreparedView& view, bool prefilter) const;
   Best BestHistogramMatch(const EncodedView& view, double& best_divergence) const;
-  double RotationDifference(const EncodedView& view, uint32_t id, int& best_rotation) const;
+  // view_columns: the view's columns, column-major, each zero-padded to a multiple of 16 bytes.
+  double RotationDifference(const std::vector<uint8_t>& view_columns, uint32_t id, int& best_rotation) const;
   double ShiftToAngle(int shift) const;
 
   const TemplateConfig config_;

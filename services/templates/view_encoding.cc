@@ -7,6 +7,8 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 namespace rslam::templates {
 
@@ -162,19 +164,28 @@ void ViewEncoder::EncodeGrid(const cv::Mat& crop, EncodedView& out) const {
 void ViewEncoder::EncodeHistogram(const cv::Mat& crop, EncodedView& out) const {
   cv::Mat panorama = crop;
   // Which crop columns are dead: a crop column belongs to rotation column c * W / crop_width.
-  std::vector<bool> dead_rotation_column(width_, false);
-  for (int c : config_.dead_zone_columns) dead_rotation_column[c] = true;
-  std::vector<bool> dead(crop.cols, false);
-  for (int x = 0; x < crop.cols; ++x) dead[x] = dead_rotation_column[static_cast<int64_t>(x) * width_ / crop.cols];
+  // The live ones as runs [begin, end), so the pixel loops below have no per-pixel test.
+  std::vector<uint8_t> dead_rotation_column(width_, 0);
+  for (int c : config_.dead_zone_columns) dead_rotation_column[c] = 1;
+  std::vector<std::pair<int, int>> live_runs;
+  for (int x = 0; x < crop.cols; ++x) {
+    if (dead_rotation_column[static_cast<int64_t>(x) * width_ / crop.cols]) continue;
+    if (!live_runs.empty() && live_runs.back().second == x) {
+      ++live_runs.back().second;
+    } else {
+      live_runs.emplace_back(x, x + 1);
+    }
+  }
 
   if (config_.histogram_normalise_intensity) {
-    int lo = 255, hi = 0;
+    uint8_t lo = 255, hi = 0;
     for (int y = 0; y < crop.rows; ++y) {
       const uint8_t* row = crop.ptr<uint8_t>(y);
-      for (int x = 0; x < crop.cols; ++x) {
-        if (dead[x]) continue;
-        lo = std::min<int>(lo, row[x]);
-        hi = std::max<int>(hi, row[x]);
+      for (auto [begin, end] : live_runs) {
+        for (int x = begin; x < end; ++x) {
+          lo = std::min(lo, row[x]);
+          hi = std::max(hi, row[x]);
+        }
       }
     }
     if (hi > lo) {
@@ -184,19 +195,31 @@ void ViewEncoder::EncodeHistogram(const cv::Mat& crop, EncodedView& out) const {
     }
   }
 
-  out.histogram.assign(histogram_bins_, 0.0f);
-  std::vector<uint32_t> counts(histogram_bins_, 0);
+  // Four interleaved partial histograms: consecutive pixels often fall in the same bin, and one
+  // array would chain every increment through a store and a load.
+  uint8_t bin_of[256];
+  for (int v = 0; v < 256; ++v) bin_of[v] = static_cast<uint8_t>(v * histogram_bins_ / 256);
+  std::vector<uint32_t> partial(static_cast<std::size_t>(4) * histogram_bins_, 0);
   uint32_t total = 0;
   for (int y = 0; y < panorama.rows; ++y) {
     const uint8_t* row = panorama.ptr<uint8_t>(y);
-    for (int x = 0; x < panorama.cols; ++x) {
-      if (dead[x]) continue;
-      ++counts[row[x] * histogram_bins_ / 256];
-      ++total;
+    for (auto [begin, end] : live_runs) {
+      int x = begin;
+      for (; x + 4 <= end; x += 4) {
+        ++partial[bin_of[row[x]]];
+        ++partial[histogram_bins_ + bin_of[row[x + 1]]];
+        ++partial[2 * histogram_bins_ + bin_of[row[x + 2]]];
+        ++partial[3 * histogram_bins_ + bin_of[row[x + 3]]];
+      }
+      for (; x < end; ++x) ++partial[bin_of[row[x]]];
+      total += static_cast<uint32_t>(end - begin);
     }
   }
+  out.histogram.assign(histogram_bins_, 0.0f);
   for (int b = 0; b < histogram_bins_; ++b) {
-    out.histogram[b] = total ? static_cast<float>(counts[b]) / static_cast<float>(total) : 0.0f;
+    const uint32_t count = partial[b] + partial[histogram_bins_ + b] + partial[2 * histogram_bins_ + b] +
+                           partial[3 * histogram_bins_ + b];
+    out.histogram[b] = total ? static_cast<float>(count) / static_cast<float>(total) : 0.0f;
   }
 
   cv::Mat small;
