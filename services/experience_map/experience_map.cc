@@ -1,6 +1,7 @@
 #include "services/experience_map/experience_map.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -201,13 +202,25 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
   }
 }
 
-double ExperienceMap::RelaxLink(const Link& link) {
+double ExperienceMap::RelaxLink(uint32_t index) {
+  const Link& link = links_[index];
   Experience& from = experiences_[link.from_id];
   Experience& to = experiences_[link.to_id];
   const double alpha = config_.exp_correction;
   // Where `from` and the link say `to` should be; move both by alpha of the error (000 eq. 3).
-  const double lx = from.x_m + link.d_m * std::cos(from.th_rad + link.heading_rad);
-  const double ly = from.y_m + link.d_m * std::sin(from.th_rad + link.heading_rad);
+  // Once a part of the map has settled, its corrections no longer change the angles' bits, and
+  // the cosine and sine of the same angle are the same numbers: they are kept per link and
+  // recomputed only when the angle's bits change (the trigonometry is most of a relaxation).
+  const double angle = from.th_rad + link.heading_rad;
+  if (index >= link_trig_.size()) link_trig_.resize(links_.size());
+  LinkTrig& trig = link_trig_[index];
+  if (std::bit_cast<uint64_t>(angle) != std::bit_cast<uint64_t>(trig.angle)) {
+    trig.angle = angle;
+    trig.cos = std::cos(angle);
+    trig.sin = std::sin(angle);
+  }
+  const double lx = from.x_m + link.d_m * trig.cos;
+  const double ly = from.y_m + link.d_m * trig.sin;
   const double ex = (to.x_m - lx) * alpha;
   const double ey = (to.y_m - ly) * alpha;
   from.x_m += ex;
@@ -264,7 +277,7 @@ int ExperienceMap::CorrectBudgeted() {
   last_correction_ = 0.0;
   if (!local_region_.empty()) {
     double largest = 0.0;
-    for (uint32_t li : local_region_) largest = std::max(largest, RelaxLink(links_[li]));
+    for (uint32_t li : local_region_) largest = std::max(largest, RelaxLink(li));
     last_correction_ = largest;
     relaxed += static_cast<int>(local_region_.size());
     budget -= static_cast<int>(local_region_.size());
@@ -281,7 +294,7 @@ int ExperienceMap::CorrectBudgeted() {
     }
     const auto& out = links_from_[sweep_experience_];
     if (sweep_link_ < out.size()) {
-      last_correction_ = std::max(last_correction_, RelaxLink(links_[out[sweep_link_]]));
+      last_correction_ = std::max(last_correction_, RelaxLink(out[sweep_link_]));
       ++sweep_link_;
       ++relaxed;
     } else {
@@ -297,7 +310,7 @@ void ExperienceMap::Relax(int iterations) {
   last_correction_ = 0.0;
   for (int i = 0; i < iterations; ++i) {
     for (uint32_t e = 0; e < experiences_.size(); ++e) {
-      for (uint32_t li : links_from_[e]) last_correction_ = std::max(last_correction_, RelaxLink(links_[li]));
+      for (uint32_t li : links_from_[e]) last_correction_ = std::max(last_correction_, RelaxLink(li));
     }
   }
   sweep_experience_ = 0;

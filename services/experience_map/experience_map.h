@@ -24,6 +24,7 @@
 // exp_relax_budget_links = 0 restores OpenRatSLAM's behaviour.
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "services/experience_map/experience_action.h"
@@ -119,8 +120,8 @@ class ExperienceMap {
   void AverageInto(Link& link, const Observation& o, bool reversed);
   int FindLink(uint32_t from, uint32_t to) const;
   void SetCurrent(uint32_t id, double relative_angle_rad);
-  // Relaxes one link (000 eq. 3); returns the largest change it made.
-  double RelaxLink(const Link& link);
+  // Relaxes link links_[index] (000 eq. 3); returns the largest change it made.
+  double RelaxLink(uint32_t index);
   void SeedLocalRegion(uint32_t a, uint32_t b);
   void ValidateIds(const ExperienceAction& a) const;
 
@@ -141,6 +142,14 @@ class ExperienceMap {
   std::vector<uint32_t> seen_link_;
   uint32_t seed_stamp_ = 0;
   std::vector<uint32_t> seed_queue_;
+  // RelaxLink scratch (not state): per link, the last angle (from's facing plus the link's
+  // heading) and its cosine and sine; a NaN angle matches nothing.
+  struct LinkTrig {
+    double angle = std::numeric_limits<double>::quiet_NaN();
+    double cos = 0.0;
+    double sin = 0.0;
+  };
+  std::vector<LinkTrig> link_trig_;
   uint64_t next_sequence_ = 0;
   double last_correction_ = 0.0;
 };
