@@ -10,8 +10,8 @@
 #include <stdexcept>
 #include <string>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
+#if defined(__x86_64__)
+#include <immintrin.h>
 #endif
 
 namespace rslam::odometry {
@@ -122,30 +122,73 @@ ProfileMatch BestProfileShift(std::span<const float> current, std::span<const fl
   return best;
 }
 
+namespace {
+
+// sums[x] = sum over `rows` rows of row[x] for x in [x0, width), 16 columns at a time in 16-bit
+// SSE2 lanes (exact for up to 257 rows; more rows fall to the plain loop). Returns where it
+// stopped.
+int ColumnSumsSse2(const uint8_t* first, std::size_t stride, int rows, int x0, int width, uint32_t* sums) {
+#if defined(__SSE2__)
+  if (rows <= 257) {
+    const __m128i zero = _mm_setzero_si128();
+    for (; x0 + 16 <= width; x0 += 16) {
+      __m128i low = zero, high = zero;
+      const uint8_t* p = first + x0;
+      for (int y = 0; y < rows; ++y, p += stride) {
+        const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+        low = _mm_add_epi16(low, _mm_unpacklo_epi8(v, zero));
+        high = _mm_add_epi16(high, _mm_unpackhi_epi8(v, zero));
+      }
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(sums + x0), _mm_unpacklo_epi16(low, zero));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(sums + x0 + 4), _mm_unpackhi_epi16(low, zero));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(sums + x0 + 8), _mm_unpacklo_epi16(high, zero));
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(sums + x0 + 12), _mm_unpackhi_epi16(high, zero));
+    }
+  }
+#endif
+  return x0;
+}
+
+#if defined(__x86_64__)
+// The same, 32 columns at a time (AVX2), then 16 at a time.
+__attribute__((target("avx2"))) int ColumnSumsAvx2(const uint8_t* first, std::size_t stride, int rows, int x0,
+                                                   int width, uint32_t* sums) {
+  if (rows <= 257) {
+    for (; x0 + 32 <= width; x0 += 32) {
+      __m256i low = _mm256_setzero_si256(), high = _mm256_setzero_si256();
+      const uint8_t* p = first + x0;
+      for (int y = 0; y < rows; ++y, p += stride) {
+        low = _mm256_add_epi16(low, _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))));
+        high = _mm256_add_epi16(high, _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p + 16))));
+      }
+      for (int half = 0; half < 2; ++half) {
+        const __m256i v = half == 0 ? low : high;
+        uint32_t* out = sums + x0 + 16 * half;
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(out), _mm256_cvtepu16_epi32(_mm256_castsi256_si128(v)));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + 8), _mm256_cvtepu16_epi32(_mm256_extracti128_si256(v, 1)));
+      }
+    }
+  }
+  return ColumnSumsSse2(first, stride, rows, x0, width, sums);
+}
+#endif
+
+}  // namespace
+
 void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, std::vector<float>& profile) {
   profile.resize(crop.width);
   std::vector<uint32_t> sums(crop.width, 0);
   const uint8_t* first = grey.ptr<uint8_t>(crop.y) + crop.x;
   const std::size_t stride = grey.step[0];
-  int x0 = 0;
-#if defined(__SSE2__)
-  // Blocks of 16 columns summed down the rows in 16-bit registers (exact for up to 257 rows).
-  if (crop.height <= 257) {
-    const __m128i zero = _mm_setzero_si128();
-    for (; x0 + 16 <= crop.width; x0 += 16) {
-      __m128i low = zero, high = zero;
-      const uint8_t* p = first + x0;
-      for (int y = 0; y < crop.height; ++y, p += stride) {
-        const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
-        low = _mm_add_epi16(low, _mm_unpacklo_epi8(v, zero));
-        high = _mm_add_epi16(high, _mm_unpackhi_epi8(v, zero));
-      }
-      alignas(16) uint16_t lanes[16];
-      _mm_store_si128(reinterpret_cast<__m128i*>(lanes), low);
-      _mm_store_si128(reinterpret_cast<__m128i*>(lanes + 8), high);
-      for (int k = 0; k < 16; ++k) sums[x0 + k] = lanes[k];
-    }
-  }
+#if defined(__x86_64__)
+  static const bool avx2 = [] {  // decided once; the project is not built for a particular CPU
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
+  const int x0 = avx2 ? ColumnSumsAvx2(first, stride, crop.height, 0, crop.width, sums.data())
+                      : ColumnSumsSse2(first, stride, crop.height, 0, crop.width, sums.data());
+#else
+  const int x0 = ColumnSumsSse2(first, stride, crop.height, 0, crop.width, sums.data());
 #endif
   for (int y = 0; y < crop.height; ++y) {
     const uint8_t* row = first + y * stride;

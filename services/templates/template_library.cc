@@ -110,12 +110,15 @@ namespace {
 
 // prefix[x] = sum of pixels in columns < x, for x in 0..width (prefix has width + 1 entries).
 void ColumnPrefix(const uint8_t* pixels, int width, int height, int stride, uint32_t* prefix) {
+  // Column sums row by row (a vectorisable loop), then the running sum.
   prefix[0] = 0;
-  for (int x = 0; x < width; ++x) {
-    uint32_t column = 0;
-    for (int y = 0; y < height; ++y) column += pixels[static_cast<std::size_t>(y) * stride + x];
-    prefix[x + 1] = prefix[x] + column;
+  uint32_t* column = prefix + 1;
+  std::fill(column, column + width, 0u);
+  for (int y = 0; y < height; ++y) {
+    const uint8_t* row = pixels + static_cast<std::size_t>(y) * stride;
+    for (int x = 0; x < width; ++x) column[x] += row[x];
   }
+  for (int x = 0; x < width; ++x) prefix[x + 1] += prefix[x];
 }
 
 }  // namespace

@@ -117,7 +117,10 @@ void ViewEncoder::EncodeGrid(const cv::Mat& crop, EncodedView& out) const {
     const double mean = cv::mean(view)[0];
     if (mean > 1e-6) {
       view *= config_.normalisation / mean;
-      cv::min(view, 1.0, view);
+      for (int y = 0; y < view.rows; ++y) {  // cv::min(view, 1.0): the same floats, without its overhead
+        float* row = view.ptr<float>(y);
+        for (int x = 0; x < view.cols; ++x) row[x] = std::min(row[x], 1.0f);
+      }
     }
   }
   // OpenRatSLAM's vt_patch_normalise: z-score over a (2r+1)^2 patch, edges clamped, mapped
