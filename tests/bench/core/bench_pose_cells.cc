@@ -71,9 +71,13 @@ void BM_PoseCellFrameDefault21x21x36(benchmark::State& state) { RunPoseCellFrame
 void BM_PoseCellFrameRevisitStLucia30x30x36(benchmark::State& state) { RunPoseCellRevisits(state, 30, 2.0); }
 void BM_PoseCellFrameRevisitDefault21x21x36(benchmark::State& state) { RunPoseCellRevisits(state, 21, 1.0); }
 
-BENCHMARK(BM_PoseCellFrameStLucia30x30x36)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_PoseCellFrameDefault21x21x36)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_PoseCellFrameRevisitStLucia30x30x36)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_PoseCellFrameRevisitDefault21x21x36)->Unit(benchmark::kMicrosecond);
+// A fixed number of frames: the network's state (how many packets, how large the active region)
+// depends on how far the drive has gone, so a time-based iteration count would measure a
+// different stretch of it on a faster or busier machine.
+constexpr int kMeasuredFrames = 3000;
+BENCHMARK(BM_PoseCellFrameStLucia30x30x36)->Iterations(kMeasuredFrames)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PoseCellFrameDefault21x21x36)->Iterations(kMeasuredFrames)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PoseCellFrameRevisitStLucia30x30x36)->Iterations(kMeasuredFrames)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_PoseCellFrameRevisitDefault21x21x36)->Iterations(kMeasuredFrames)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
