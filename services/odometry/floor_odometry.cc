@@ -161,10 +161,10 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
   // Seeds: the prior; the last registered motion (constant velocity), right when the column
   // profiles are fooled (repeated texture can fake a fast turn during a straight move); and the
   // last registered forward step with the prior's turn, right when the profiles miss that the
-  // robot drives on (a plain wall ahead looks the same from a little closer).
+  // robot drives (a plain wall ahead looks the same from a little closer).
   std::vector<PlanarMotion> seeds = {prior};
   if (last_registered_) seeds.push_back(last_motion_);
-  if (frames_since_moving_dx_ >= 0 && frames_since_moving_dx_ <= config_.coast_frames && !moving) {
+  if (frames_since_moving_dx_ >= 0 && prior.dx != last_moving_dx_) {  // a seed may be any age
     PlanarMotion driving_on = prior;
     driving_on.dx = last_moving_dx_;
     seeds.push_back(driving_on);

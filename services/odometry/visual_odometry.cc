@@ -245,6 +245,24 @@ void VisualOdometry::CropProfile(const cv::Mat& image, const cv::Rect& crop, std
   ColumnIntensityProfile(crop_grey_, cv::Rect(0, 0, crop.width, crop.height), profile);
 }
 
+namespace {
+
+// Offset in (-0.5, 0.5) of the minimum of f around the integer best shift, by fitting a V (equal
+// slopes) through f(s-1), f(s), f(s+1); 0 at the edge of the searched range.
+double SubpixelOffset(std::span<const float> current, std::span<const float> previous, const ProfileMatch& best,
+                      bool match_gain) {
+  const int w = static_cast<int>(current.size());
+  if (w - (std::abs(best.shift) + 1) < 1) return 0.0;
+  const double left = ShiftedProfileDifference(current, previous, best.shift - 1, match_gain);
+  const double right = ShiftedProfileDifference(current, previous, best.shift + 1, match_gain);
+  const double centre = best.difference;
+  const double slope = std::max(left, right) - centre;
+  if (!(slope > 1e-12)) return 0.0;
+  return std::clamp((left - right) / (2.0 * slope), -0.5, 0.5);
+}
+
+}  // namespace
+
 Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   CheckImage(image);
   if (!std::isfinite(dt_s) || dt_s <= 0.0) {
@@ -285,7 +303,10 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   const double rad_per_px = config_.camera_fov_deg * std::numbers::pi / 180.0 / image_size_.width;
   Velocity velocity;
   velocity.rotation_shift_px = rotation.shift;
-  velocity.vrot = rotation.shift * rad_per_px / dt_s;
+  double shift = rotation.shift;
+  if (config_.subpixel_rotation)
+    shift += SubpixelOffset(vrot_previous_, vrot_profile_, rotation, config_.normalise_profile_brightness);
+  velocity.vrot = shift * rad_per_px / dt_s;
   velocity.speed_difference = speed.difference;
   const double moving_difference = std::max(speed.difference - config_.vtrans_noise_floor, 0.0);
   velocity.vtrans =

@@ -8,6 +8,7 @@
 //
 //   rotation:  s_m = argmin_s f(s) over the rotation profile (eq. 5, 7);
 //              dtheta = s_m * camera_fov / image_width;  vrot = dtheta / dt
+//              (subpixel_rotation: s_m refined below a pixel by a V fitted through f(s_m +- 1))
 //   speed:     v = f(s_m) over the speed profile at its own best shift (eq. 6), then
 //              vtrans = min(max(v - vtrans_noise_floor, 0) * vtrans_scaling / (camera_hz * dt),
 //                           vtrans_max)

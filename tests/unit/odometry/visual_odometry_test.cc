@@ -131,6 +131,26 @@ TEST(VisualOdometryTest, SceneMovingRightIsCounterClockwiseRotationOfExpectedMag
   }
 }
 
+TEST(VisualOdometryTest, SubpixelRotationRecoversAFractionalShift) {
+  // The scene moved right by 12.4 px: the view of a 5x wider texture resampled at 1/5 pixel.
+  const cv::Mat wide = Texture(5 * 760, 480, 3, 40);
+  auto view = [&](int offset_fifths) {
+    cv::Mat small;
+    cv::resize(wide(cv::Rect(offset_fifths, 0, 5 * 640, 480)), small, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
+    return small;
+  };
+  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
+  for (const bool subpixel : {false, true}) {
+    VisualOdometryConfig config;
+    config.subpixel_rotation = subpixel;
+    VisualOdometry vo(config);
+    vo.Update(view(300), kDt);
+    const Velocity v = vo.Update(view(300 - 62), kDt);
+    EXPECT_EQ(v.rotation_shift_px, 12);
+    EXPECT_NEAR(v.vrot * kDt / rad_per_px, subpixel ? 12.4 : 12.0, subpixel ? 0.1 : 1e-9);
+  }
+}
+
 TEST(VisualOdometryTest, RotationRateScalesWithDt) {
   const cv::Mat wide = Texture(760, 480, 3);
   VisualOdometry a(VisualOdometryConfig{}), b(VisualOdometryConfig{});
