@@ -18,9 +18,10 @@ constexpr int kNeighbourDy[8] = {0, 1, 0, -1, 1, 1, -1, -1};
 
 // Breadth-first search from the robot's cell through cells that hold no obstacle themselves
 // (dilation margin allowed, unknown not) to the nearest cell with a finite transform cost; the
-// cells after the robot's, or empty when there is none within max_cells steps.
+// cells after the robot's, or empty when there is none within kMaxSteps cells (a robot that
+// drove in through a gap the grid has since narrowed can drive out the same way).
 std::vector<std::pair<int, int>> EscapePath(const CoarseGrid& cs, const std::vector<int32_t>& cost, int rx, int ry) {
-  constexpr int kMaxSteps = 25;
+  constexpr int kMaxSteps = 25;  // 5 m at the demo's 0.2 m exploration cells
   const int w = cs.width;
   std::vector<int32_t> parent(cs.cells.size(), -1);
   std::vector<int> depth(cs.cells.size(), 0);
