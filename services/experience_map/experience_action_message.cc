@@ -29,4 +29,35 @@ ExperienceAction FromActionMessage(const msg::PoseCellAction& m) {
   return a;
 }
 
+void FillMapMessage(const ExperienceMap& map, msg::ExperienceMap& out) {
+  out.current_experience_id = map.has_current() ? map.current_id() : kNoExperience;
+  out.experiences.clear();
+  out.experiences.reserve(map.experiences().size());
+  for (const Experience& e : map.experiences()) {
+    msg::Experience x{};
+    x.id = e.id;
+    x.x_m = e.x_m;
+    x.y_m = e.y_m;
+    x.theta_rad = e.th_rad;
+    x.template_id = e.template_id;
+    x.pc_x = static_cast<float>(e.pc_x);
+    x.pc_y = static_cast<float>(e.pc_y);
+    x.pc_th = static_cast<float>(e.pc_th);
+    out.experiences.push_back(x);
+  }
+  out.links.clear();
+  out.links.reserve(map.links().size());
+  for (const Link& l : map.links()) {
+    msg::ExperienceLink x{};
+    x.from_id = l.from_id;
+    x.to_id = l.to_id;
+    x.distance_m = l.d_m;
+    x.heading_rad = l.heading_rad;
+    x.facing_rad = l.facing_rad;
+    x.travel_time_s = l.travel_time_s;
+    x.closes_loop = l.closes_loop;
+    out.links.push_back(x);
+  }
+}
+
 }  // namespace rslam::experience_map

@@ -196,32 +196,7 @@ class ExperienceMapNode::Mapper {
     if (out.header.robot_id.empty()) out.header.robot_id = context_.robot_id();
     out.map_version = map_version_;
     out.action_seq = has_last_ ? last_applied_ : 0;
-    out.current_experience_id = map_.has_current() ? map_.current_id() : kNoExperience;
-    out.experiences.reserve(map_.experiences().size());
-    for (const Experience& e : map_.experiences()) {
-      msg::Experience x;
-      x.id = e.id;
-      x.x_m = e.x_m;
-      x.y_m = e.y_m;
-      x.theta_rad = e.th_rad;
-      x.template_id = e.template_id;
-      x.pc_x = static_cast<float>(e.pc_x);
-      x.pc_y = static_cast<float>(e.pc_y);
-      x.pc_th = static_cast<float>(e.pc_th);
-      out.experiences.push_back(x);
-    }
-    out.links.reserve(map_.links().size());
-    for (const Link& l : map_.links()) {
-      msg::ExperienceLink x;
-      x.from_id = l.from_id;
-      x.to_id = l.to_id;
-      x.distance_m = l.d_m;
-      x.heading_rad = l.heading_rad;
-      x.facing_rad = l.facing_rad;
-      x.travel_time_s = l.travel_time_s;
-      x.closes_loop = l.closes_loop;
-      out.links.push_back(x);
-    }
+    FillMapMessage(map_, out);
     map_pub_->Publish(out);
     snapshot_published_ = true;
     snapshot_seq_ = out.action_seq;

@@ -5,36 +5,14 @@
 #include <set>
 #include <sstream>
 
+#include "services/experience_map/experience_action_message.h"
+
 namespace rslam::system_test {
 
 MapRecord MapOfRunner(const run::RatSlamRunner& runner) {
-  const auto& map = runner.experience_map();
-  MapRecord record;
-  for (const auto& e : map.experiences()) {
-    msg::Experience x{};
-    x.id = e.id;
-    x.x_m = e.x_m;
-    x.y_m = e.y_m;
-    x.theta_rad = e.th_rad;
-    x.template_id = e.template_id;
-    x.pc_x = static_cast<float>(e.pc_x);
-    x.pc_y = static_cast<float>(e.pc_y);
-    x.pc_th = static_cast<float>(e.pc_th);
-    record.experiences.push_back(x);
-  }
-  for (const auto& l : map.links()) {
-    msg::ExperienceLink x{};
-    x.from_id = l.from_id;
-    x.to_id = l.to_id;
-    x.distance_m = l.d_m;
-    x.heading_rad = l.heading_rad;
-    x.facing_rad = l.facing_rad;
-    x.travel_time_s = l.travel_time_s;
-    x.closes_loop = l.closes_loop;
-    record.links.push_back(x);
-  }
-  record.current_experience_id = map.current_id();
-  return record;
+  msg::ExperienceMap message;
+  experience_map::FillMapMessage(runner.experience_map(), message);
+  return MapOfSnapshot(message);
 }
 
 MapRecord MapOfSnapshot(const msg::ExperienceMap& snapshot) {
