@@ -29,7 +29,7 @@
 // direction unconstrained (a corridor's parallel walls say nothing about motion along them):
 // smallest eigenvalue of the normal matrix per pair below min_constraint.
 //
-// Pure, deterministic, no allocation after warm-up beyond the key frame's copy.
+// Pure and deterministic; a frame costs a few small allocations (its points, the seeds).
 
 #include <Eigen/Core>
 
