@@ -6,7 +6,8 @@
 set -euo pipefail
 SECONDS_TO_RUN=${1:-60}
 HERE=$(cd "$(dirname "$0")" && pwd)
-BUILD=${2:-${TMPDIR:-/tmp}/rslam-fuzz-build}
+# Default build dir inside this checkout (a shared /tmp dir would tie it to another checkout).
+BUILD=${2:-$HERE/../../build/fuzz}
 mkdir -p "$BUILD"
 BUILD=$(cd "$BUILD" && pwd)
 CC=clang CXX=clang++ cmake -S "$HERE" -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
