@@ -41,7 +41,7 @@ inline fs::path ScratchDir() {
   std::string name = std::string(info->test_suite_name()) + "_" + info->name();
   for (char& c : name)
     if (c == '/') c = '_';
-  const auto dir = fs::temp_directory_path() / "rslam_record_test" / name;
+  const auto dir = fs::temp_directory_path() / ("rslam_record_test_" + std::to_string(::getpid())) / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

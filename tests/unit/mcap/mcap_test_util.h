@@ -2,6 +2,7 @@
 // Shared by the MCAP tests: a scratch directory per test and a deterministic message stream.
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -22,7 +23,7 @@ inline std::filesystem::path ScratchDir() {
   for (char& c : name) {
     if (c == '/') c = '_';
   }
-  const auto dir = std::filesystem::temp_directory_path() / "rslam_mcap_test" / name;
+  const auto dir = std::filesystem::temp_directory_path() / ("rslam_mcap_test_" + std::to_string(::getpid())) / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

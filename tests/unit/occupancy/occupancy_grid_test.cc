@@ -1,6 +1,7 @@
 #include "services/occupancy/occupancy_grid.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -125,7 +126,7 @@ TEST(OccupancyGridTest, RosCellsAndMapServerExportUseTheStandardShades) {
   EXPECT_EQ(image.at<uchar>(4, 0), 205);
   EXPECT_EQ(image.at<uchar>(4, 3), 254);
   EXPECT_EQ(image.at<uchar>(4, 6), 0);
-  const auto dir = std::filesystem::temp_directory_path() / "occupancy_grid_test";
+  const auto dir = std::filesystem::temp_directory_path() / ("occupancy_grid_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   WriteRosMap(grid, dir / "map");
   std::ifstream yaml(dir / "map.yaml");
