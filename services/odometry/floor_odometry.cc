@@ -1,8 +1,5 @@
 #include "services/odometry/floor_odometry.h"
 
-#include <Eigen/Cholesky>
-#include <Eigen/Geometry>
-
 #include <cmath>
 #include <stdexcept>
 
@@ -46,93 +43,25 @@ void FloorOdometry::Reset() {
   last_registered_ = false;
   last_moving_dx_ = 0.0;
   frames_since_moving_dx_ = -1;
-  key_points_.clear();
-  key_normals_.clear();
+  key_ = BoundaryScan{};
   key_to_robot_.setZero();
 }
 
 void FloorOdometry::MakeKeyFrame(std::vector<Eigen::Vector2d>&& points) {
-  key_points_ = std::move(points);
-  key_normals_.resize(key_points_.size());
-  const size_t n = key_points_.size();
-  for (size_t i = 0; i < n; ++i) {
-    const Eigen::Vector2d& p = key_points_[i];
-    const bool prev = i > 0 && (key_points_[i - 1] - p).norm() <= kNeighbourMaxDistanceM;
-    const bool next = i + 1 < n && (key_points_[i + 1] - p).norm() <= kNeighbourMaxDistanceM;
-    Eigen::Vector2d along = Eigen::Vector2d::Zero();
-    if (prev || next) along = (next ? key_points_[i + 1] : p) - (prev ? key_points_[i - 1] : p);
-    // A lone point: point-to-point along the viewing ray.
-    key_normals_[i] = along.norm() > 1e-9 ? Eigen::Vector2d(-along.y(), along.x()).normalized()
-                                          : Eigen::Vector2d(-p.normalized());
-  }
+  key_ = BoundaryScan::FromPoints(std::move(points), kNeighbourMaxDistanceM);
   key_to_robot_.setZero();
   has_key_ = true;
 }
 
-FloorOdometry::Registration FloorOdometry::Register(const std::vector<Eigen::Vector2d>& points,
-                                                    const Eigen::Vector3d& predicted) const {
-  Registration r;
-  r.pose = predicted;
-  if (static_cast<int>(points.size()) < config_.min_points) return r;
-  Eigen::Vector3d& pose = r.pose;
-  const Eigen::Vector2d lateral(-std::sin(predicted.z()), std::cos(predicted.z()));
-  const Eigen::Vector2d forward(std::cos(predicted.z()), std::sin(predicted.z()));
-  const double max_pair2 = config_.max_pair_distance_m * config_.max_pair_distance_m;
-  for (int iteration = 0; iteration < config_.iterations; ++iteration) {
-    const double c = std::cos(pose.z()), s = std::sin(pose.z());
-    Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d g = Eigen::Vector3d::Zero();
-    int pairs = 0;
-    double weights = 0.0, residual2 = 0.0;
-    for (const Eigen::Vector2d& p : points) {
-      const Eigen::Vector2d q(pose.x() + c * p.x() - s * p.y(), pose.y() + s * p.x() + c * p.y());
-      size_t best = 0;
-      double best2 = max_pair2;
-      bool found = false;
-      for (size_t k = 0; k < key_points_.size(); ++k) {
-        const double d2 = (key_points_[k] - q).squaredNorm();
-        if (d2 < best2) {
-          best2 = d2;
-          best = k;
-          found = true;
-        }
-      }
-      if (!found) continue;
-      const Eigen::Vector2d& n = key_normals_[best];
-      const double e = n.dot(q - key_points_[best]);
-      const Eigen::Vector3d j(n.x(), n.y(), n.dot(Eigen::Vector2d(-s * p.x() - c * p.y(), c * p.x() - s * p.y())));
-      // One image row spans a floor distance growing with the square of the range: weigh by the
-      // inverse variance, relative to a point 1 m away.
-      const double weight = 1.0 / std::max(p.squaredNorm() * key_points_[best].squaredNorm(), 0.01);
-      h += weight * j * j.transpose();
-      g += weight * j * e;
-      weights += weight;
-      residual2 += weight * e * e;
-      ++pairs;
-    }
-    r.pairs = pairs;
-    r.mean_residual2 = weights > 0 ? residual2 / weights : 0.0;
-    if (pairs < config_.min_points ||
-        forward.dot(h.topLeftCorner<2, 2>() * forward) / weights < config_.min_constraint) {
-      r.ok = false;
-      return r;
-    }
-    const Eigen::Vector3d j_lateral(lateral.x(), lateral.y(), 0.0);
-    const double lateral_offset = lateral.dot(pose.head<2>() - predicted.head<2>());
-    h += kLateralPriorPerPair * weights * j_lateral * j_lateral.transpose();
-    g += kLateralPriorPerPair * weights * lateral_offset * j_lateral;
-    h(2, 2) += kRotationPriorPerPair * weights;
-    g(2) += kRotationPriorPerPair * weights * (pose.z() - predicted.z());
-    const Eigen::Vector3d step = h.ldlt().solve(-g);
-    if (!step.allFinite()) {
-      r.ok = false;
-      return r;
-    }
-    pose += step;
-    r.ok = true;
-    if (step.head<2>().norm() < 1e-6 && std::abs(step.z()) < 1e-7) break;
-  }
-  return r;
+Alignment FloorOdometry::Register(std::span<const Eigen::Vector2d> points, const Eigen::Vector3d& predicted) const {
+  AlignmentOptions options;
+  options.max_pair_distance_m = config_.max_pair_distance_m;
+  options.iterations = config_.iterations;
+  options.min_pairs = config_.min_points;
+  options.lateral_prior = kLateralPriorPerPair;
+  options.rotation_prior = kRotationPriorPerPair;
+  options.min_forward_constraint = config_.min_constraint;
+  return AlignToScan(key_, points, predicted, options);
 }
 
 PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, const PlanarMotion& given_prior) {
@@ -152,7 +81,7 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
   PlanarMotion out = prior;
   out.measured = false;
   out.pairs = 0;
-  if (!has_key_ || static_cast<int>(key_points_.size()) < config_.min_points) {
+  if (!has_key_ || static_cast<int>(key_.points.size()) < config_.min_points) {
     MakeKeyFrame(std::move(points));
     last_registered_ = false;
     return out;
@@ -169,9 +98,9 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
     driving_on.dx = last_moving_dx_;
     seeds.push_back(driving_on);
   }
-  Registration best;
+  Alignment best;
   for (const PlanarMotion& seed : seeds) {
-    const Registration r = Register(points, Compose(previous, seed.dx, seed.dy, seed.dtheta));
+    const Alignment r = Register(points, Compose(previous, seed.dx, seed.dy, seed.dtheta));
     if (!r.ok) continue;
     // The closer fit wins, unless it pairs up clearly fewer points (a wrong seed can still
     // settle where a few points happen to fit).

@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "common/config/config_error.h"
+#include "services/odometry/boundary_scan.h"
 
 namespace rslam::odometry {
 
@@ -100,20 +101,13 @@ class FloorOdometry {
   const FloorOdometryConfig& config() const { return config_; }
 
  private:
-  struct Registration {
-    bool ok = false;
-    Eigen::Vector3d pose = Eigen::Vector3d::Zero();  // robot in the key frame
-    int pairs = 0;
-    double mean_residual2 = 0.0;  // weighted mean squared point-to-line distance (m^2)
-  };
   void MakeKeyFrame(std::vector<Eigen::Vector2d>&& points);
   // ICP from the predicted pose of the robot in the key frame.
-  Registration Register(const std::vector<Eigen::Vector2d>& points, const Eigen::Vector3d& predicted) const;
+  Alignment Register(std::span<const Eigen::Vector2d> points, const Eigen::Vector3d& predicted) const;
 
   const FloorOdometryConfig config_;
   bool has_key_ = false;
-  std::vector<Eigen::Vector2d> key_points_;
-  std::vector<Eigen::Vector2d> key_normals_;  // unit normal of the boundary line at each key point
+  BoundaryScan key_;
   Eigen::Vector3d key_to_robot_ = Eigen::Vector3d::Zero();  // robot pose in the key frame (x, y, theta)
   PlanarMotion last_motion_;     // the previous frame's, when it was registered
   bool last_registered_ = false;

@@ -1,0 +1,63 @@
+#pragma once
+// A floor-boundary scan (the points where the floor meets obstacles, in a robot frame, in
+// bearing order) and point-to-line ICP of another scan onto it, in the plane (x forward, y left,
+// theta counter-clockwise).
+//
+// Used twice: frame to key frame by the floor odometry (floor_odometry.h), and the robot's view to
+// the view stored with a recognised experience by the experience map service, which measures where
+// the robot stands relative to the place it recognised instead of assuming it stands on it.
+//
+// Each point of the aligned scan pairs with the nearest reference point within
+// max_pair_distance_m, the error is its distance to the line through that point and its bearing
+// neighbours, and Gauss-Newton solves for (x, y, theta), pairs weighted by 1 / (r_a r_b)^2 (a
+// camera row's floor footprint grows with r^2; relative to a point 1 m away). Priors, each
+// scaled by the sum of pair weights so they mean the same for few or many points, hold the
+// solution near the guess where the points say little: sideways (the guess's left axis), in turn,
+// and in every direction (a weak anchor for what the geometry leaves unconstrained, such as
+// sliding along one straight wall).
+//
+// Pure and deterministic.
+
+#include <Eigen/Core>
+
+#include <span>
+#include <vector>
+
+namespace rslam::odometry {
+
+// Reference points with the unit normal of the boundary line at each.
+struct BoundaryScan {
+  std::vector<Eigen::Vector2d> points;
+  std::vector<Eigen::Vector2d> normals;
+
+  // Normals from each point's bearing neighbours closer than neighbour_max_distance_m; a lone
+  // point gets the viewing ray as normal (point-to-point along the ray).
+  static BoundaryScan FromPoints(std::vector<Eigen::Vector2d> points, double neighbour_max_distance_m = 0.12);
+};
+
+struct AlignmentOptions {
+  double max_pair_distance_m = 0.10;
+  int iterations = 12;
+  int min_pairs = 12;
+  double lateral_prior = 0.0;   // per unit pair weight, on the offset along the guess's left axis
+  double rotation_prior = 0.0;  // per unit pair weight, on the turn away from the guess
+  double anchor_prior = 0.0;    // per unit pair weight, on the x and y offset from the guess
+  // The alignment fails when the points constrain the guess's forward axis less than this per
+  // unit pair weight (a corridor's parallel walls say nothing about motion along them); 0 = no check.
+  double min_forward_constraint = 0.0;
+};
+
+struct Alignment {
+  bool ok = false;
+  Eigen::Vector3d pose = Eigen::Vector3d::Zero();  // the aligned scan's frame in the reference's
+  int pairs = 0;                // of the last iteration
+  double mean_residual2 = 0.0;  // weighted mean squared point-to-line distance (m^2)
+};
+
+// Aligns points (in their own frame) onto reference, starting from guess (their frame's pose in
+// the reference frame). Not ok when fewer than min_pairs pairs are found, the forward constraint
+// is too weak, or the solve fails; pose then holds the last estimate.
+Alignment AlignToScan(const BoundaryScan& reference, std::span<const Eigen::Vector2d> points,
+                      const Eigen::Vector3d& guess, const AlignmentOptions& options);
+
+}  // namespace rslam::odometry
