@@ -2,6 +2,7 @@
 
 #include "services/experience_map/experience_action_message.h"
 #include "services/pose_cells/pose_cell_action_message.h"
+#include "tools/run/grey_rows.h"
 #include "tools/run/service_messages.h"
 
 #include <opencv2/imgproc.hpp>
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rslam::run {
@@ -21,6 +23,27 @@ using Clock = std::chrono::steady_clock;
 
 double MicrosSince(Clock::time_point start) {
   return std::chrono::duration<double, std::micro>(Clock::now() - start).count();
+}
+
+// The rows [begin, end) of a frame of `rows` rows that the odometry's two crops and the template
+// crop cover (a crop's y_max of -1 is the image height, as the stages resolve it). All rows when
+// a crop does not fit: the stage then refuses the frame with its own message.
+std::pair<int, int> RowsTheStagesRead(const RatSlamConfig& config, int rows) {
+  const auto& odometry = config.odometry.visual;
+  const auto& templates = config.templates.library;
+  const std::pair<int, int> crops[] = {
+      {odometry.vtrans_image_y_min, odometry.vtrans_image_y_max},
+      {odometry.vrot_image_y_min, odometry.vrot_image_y_max},
+      {templates.image_crop_y_min, templates.image_crop_y_max},
+  };
+  int begin = rows, end = 0;
+  for (auto [y_min, y_max] : crops) {
+    const int y_end = y_max == -1 ? rows : y_max;
+    if (y_min < 0 || y_end > rows || y_min >= y_end) return {0, rows};
+    begin = std::min(begin, y_min);
+    end = std::max(end, y_end);
+  }
+  return {begin, end};
 }
 
 }  // namespace
@@ -58,9 +81,12 @@ FrameRecord RatSlamRunner::ProcessFrame(const cv::Mat& image, int64_t stamp_ns) 
   record.frame_index = frames_;
   record.stamp_ns = stamp_ns;
 
-  // Odometry service.
+  // Odometry service. Only the rows the crops cover are converted (the stages read nothing
+  // else, so the result is that of converting the whole frame; see grey_rows.h).
   auto start = Clock::now();
-  const cv::Mat grey = ToGrey(image, grey_buffer_);
+  if (image.empty()) throw std::invalid_argument("empty image");
+  const auto [row_begin, row_end] = RowsTheStagesRead(config_, image.rows);
+  const cv::Mat grey = ToGreyRows(image, row_begin, row_end, grey_buffer_);
   bool restart = !has_previous_stamp_;
   if (!restart) {
     record.dt_s = static_cast<double>(stamp_ns - previous_stamp_ns_) * 1e-9;

@@ -4,6 +4,7 @@
 // recording builds the same map as the services on the bus. Per frame (ProcessFrame):
 //
 //   grey = the frame as CV_8UC1 (cv::cvtColor BGR2GRAY; mono as is)      as camera::GreyImage
+//     (only the rows the odometry and template crops cover are converted: identical crops)
 //   odometry service (OdometryNode::OnImage):
 //     dt = stamp - previous stamp; the first frame, a frame after a gap > max_frame_gap_s and a
 //     frame of another size restart the odometry: VisualOdometry::Reset, velocity 0, dt 0
@@ -130,7 +131,7 @@ class RatSlamRunner {
   templates::TemplateLibrary templates_;
   pose_cells::PoseCellNetwork pose_cells_;
   experience_map::ExperienceMap map_;
-  cv::Mat grey_buffer_;  // only ever written by the colour conversion
+  cv::Mat grey_buffer_;  // only ever written by the colour conversion; valid in the crops' rows
   uint64_t frames_ = 0;
   bool has_previous_stamp_ = false;  // odometry service
   int64_t previous_stamp_ns_ = 0;

@@ -8,6 +8,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include <opencv2/imgproc.hpp>
+
 #include "synthetic_loop.h"
 #include "services/experience_map/experience_action_message.h"
 #include "services/pose_cells/pose_cell_action_message.h"
@@ -106,6 +108,53 @@ TEST(RatSlamRunner, GreyAndColourFramesGiveTheSameResult) {
     EXPECT_EQ(c.view.template_id, g.view.template_id);
     EXPECT_EQ(c.action.kind, g.action.kind);
   }
+}
+
+// The runner converts only the rows the stages' crops cover: every record and the map must be
+// exactly those of feeding the whole frame's cv::cvtColor conversion. The frames get per-pixel
+// colour noise so the grey conversion really weighs three different channels.
+void ExpectColourRunEqualsWholeFrameGreyRun(const RatSlamConfig& config) {
+  const SyntheticLoop loop(36);
+  RatSlamRunner colour(config), grey(config);
+  cv::RNG rng(77);
+  for (int i = 0; i < 48; ++i) {
+    cv::Mat bgr = loop.Frame(i);
+    cv::Mat noise(bgr.size(), CV_8UC3);
+    rng.fill(noise, cv::RNG::UNIFORM, 0, 24);
+    bgr += noise;
+    cv::Mat whole_grey;
+    cv::cvtColor(bgr, whole_grey, cv::COLOR_BGR2GRAY);
+    const FrameRecord c = colour.ProcessFrame(bgr, i * kPeriodNs);
+    const FrameRecord g = grey.ProcessFrame(whole_grey, i * kPeriodNs);
+    ASSERT_EQ(c.velocity.vtrans, g.velocity.vtrans) << "frame " << i;
+    ASSERT_EQ(c.velocity.vrot, g.velocity.vrot) << "frame " << i;
+    ASSERT_EQ(c.velocity.speed_difference, g.velocity.speed_difference) << "frame " << i;
+    ASSERT_EQ(c.view.template_id, g.view.template_id) << "frame " << i;
+    ASSERT_EQ(c.view.is_new, g.view.is_new) << "frame " << i;
+    ASSERT_EQ(c.view.relative_angle_rad, g.view.relative_angle_rad) << "frame " << i;
+    ASSERT_EQ(c.view.difference, g.view.difference) << "frame " << i;
+    ASSERT_EQ(c.action.kind, g.action.kind) << "frame " << i;
+    ASSERT_EQ(c.action.experience_id, g.action.experience_id) << "frame " << i;
+  }
+  const auto& ec = colour.experience_map().experiences();
+  const auto& eg = grey.experience_map().experiences();
+  ASSERT_EQ(ec.size(), eg.size());
+  for (size_t i = 0; i < ec.size(); ++i) {
+    EXPECT_EQ(ec[i].x_m, eg[i].x_m);
+    EXPECT_EQ(ec[i].y_m, eg[i].y_m);
+    EXPECT_EQ(ec[i].th_rad, eg[i].th_rad);
+  }
+}
+
+TEST(RatSlamRunner, ColourFramesGiveExactlyTheRecordsOfTheWholeFrameConvertedToGrey) {
+  ExpectColourRunEqualsWholeFrameGreyRun(LoopConfig());
+}
+
+TEST(RatSlamRunner, CropsToTheImageEdgeGiveExactlyTheRecordsOfTheWholeFrameConvertedToGrey) {
+  YAML::Node root = YAML::Load(SyntheticLoop::ConfigYaml());
+  root["odometry"]["vtrans_image_y_max"] = -1;  // to the bottom edge
+  root["templates"]["image_crop_y_min"] = 0;    // from the top edge
+  ExpectColourRunEqualsWholeFrameGreyRun(RatSlamConfigFromYaml(root));
 }
 
 TEST(RatSlamRunner, RejectsBadFramesAndStampsWithoutChangingState) {
