@@ -7,7 +7,9 @@
 //
 // The generated message code (build/generated/rslam/msg/*.h, from idl/) calls these.
 
+#include <algorithm>
 #include <bit>
+#include <cstdio>
 #include <cstdint>
 #include <cstring>
 #include <span>
@@ -89,25 +91,28 @@ class CdrReader {
  public:
   // Reads a buffer that starts with the encapsulation header. Throws CdrError unless it is
   // little- or big-endian plain CDR.
-  explicit CdrReader(std::span<const uint8_t> data) : data_(data) {
-    if (data.size() < 4 || data[0] != 0x00 || (data[1] != 0x00 && data[1] != 0x01))
-      throw CdrError("not plain CDR (encapsulation header " + HeaderText(data) + ")");
-    swap_ = data[1] == 0x00;
-    pos_ = 4;
-  }
+  explicit CdrReader(std::span<const uint8_t> data) : single_(data), segments_(&single_, 1) { Start(); }
+
+  // Reads a message that arrived in pieces (network fragments, in order, back to back) without
+  // joining them first: a large sequence of bytes is copied once, from the pieces into the
+  // message. The pieces must outlive the reader.
+  explicit CdrReader(std::span<const std::span<const uint8_t>> segments) : segments_(segments) { Start(); }
+
+  CdrReader(const CdrReader&) = delete;
+  CdrReader& operator=(const CdrReader&) = delete;
 
   template <class T>
     requires std::is_arithmetic_v<T>
   void Read(T& v) {
     Align(sizeof(T));
     Need(sizeof(T));
-    std::memcpy(&v, data_.data() + pos_, sizeof(T));
+    CopyOut(&v, sizeof(T));
     if (swap_) v = ByteSwap(v);
-    pos_ += sizeof(T);
   }
   void Read(bool& v) {
     Need(1);
-    const uint8_t b = data_[pos_++];
+    uint8_t b = 0;
+    CopyOut(&b, 1);
     if (b > 1) throw CdrError("boolean byte " + std::to_string(b) + " at offset " + std::to_string(pos_ - 1));
     v = b == 1;
   }
@@ -116,9 +121,17 @@ class CdrReader {
     Read(n);
     if (n == 0) throw CdrError("string length 0 (must include the terminating NUL)");
     Need(n);
-    if (data_[pos_ + n - 1] != 0) throw CdrError("string not NUL-terminated");
-    s.assign(reinterpret_cast<const char*>(data_.data() + pos_), n - 1);
-    pos_ += n;
+    if (Contiguous(n)) {
+      const auto* p = reinterpret_cast<const char*>(At());
+      if (p[n - 1] != 0) throw CdrError("string not NUL-terminated");
+      s.assign(p, n - 1);
+      pos_ += n;
+      return;
+    }
+    s.resize(n);
+    CopyOut(s.data(), n);
+    if (s.back() != 0) throw CdrError("string not NUL-terminated");
+    s.pop_back();
   }
   template <class E>
     requires std::is_enum_v<E>
@@ -137,36 +150,51 @@ class CdrReader {
       return;
     }
     Align(sizeof(T));
-    Need(std::size_t{n} * sizeof(T));
+    const std::size_t bytes = std::size_t{n} * sizeof(T);
+    Need(bytes);
     if constexpr (sizeof(T) == 1) {
-      // Bytes (images) in one pass, without zero-filling first.
-      const auto* p = reinterpret_cast<const T*>(data_.data() + pos_);
-      v.assign(p, p + n);
+      // Bytes (images) in one pass, without zero-filling first (a vector that already holds
+      // enough keeps its buffer).
+      v.clear();
+      v.reserve(n);
+      while (v.size() < n) {
+        Seek();
+        const std::size_t chunk = std::min(std::size_t{n} - v.size(), seg_end_ - pos_);
+        const auto* p = reinterpret_cast<const T*>(At());
+        v.insert(v.end(), p, p + chunk);
+        pos_ += chunk;
+      }
     } else {
       v.resize(n);
-      std::memcpy(v.data(), data_.data() + pos_, std::size_t{n} * sizeof(T));
+      CopyOut(v.data(), bytes);
     }
     if (swap_)
       for (auto& x : v) x = ByteSwap(x);
-    pos_ += std::size_t{n} * sizeof(T);
   }
   // A sequence count, checked against the bytes left (each element takes at least
   // min_element_size bytes), so a corrupt count cannot trigger a huge allocation.
   uint32_t ReadCount(std::size_t min_element_size) {
     uint32_t n = 0;
     Read(n);
-    if (min_element_size > 0 && std::size_t{n} > (data_.size() - pos_) / min_element_size)
+    if (min_element_size > 0 && std::size_t{n} > remaining() / min_element_size)
       throw CdrError("sequence of " + std::to_string(n) + " elements exceeds the message size");
     return n;
   }
-  std::size_t remaining() const { return data_.size() - pos_; }
+  std::size_t remaining() const { return pos_ <= size_ ? size_ - pos_ : 0; }
 
  private:
-  static std::string HeaderText(std::span<const uint8_t> d) {
-    if (d.size() < 4) return "missing";
-    char buf[16];
-    std::snprintf(buf, sizeof(buf), "%02x %02x", d[0], d[1]);
-    return buf;
+  void Start() {
+    for (const auto& segment : segments_) size_ += segment.size();
+    seg_end_ = segments_.empty() ? 0 : segments_[0].size();
+    uint8_t header[4] = {};
+    if (size_ < 4) throw CdrError("not plain CDR (encapsulation header missing)");
+    CopyOut(header, 4);
+    if (header[0] != 0x00 || (header[1] != 0x00 && header[1] != 0x01)) {
+      char text[48];
+      std::snprintf(text, sizeof(text), "not plain CDR (encapsulation header %02x %02x)", header[0], header[1]);
+      throw CdrError(text);
+    }
+    swap_ = header[1] == 0x00;
   }
   template <class T>
   static T ByteSwap(T v) {
@@ -181,11 +209,40 @@ class CdrReader {
     pos_ += (n - rel % n) % n;
   }
   void Need(std::size_t n) const {
-    if (pos_ > data_.size() || data_.size() - pos_ < n)
-      throw CdrError("truncated: need " + std::to_string(n) + " bytes at offset " + std::to_string(pos_) +
-                     " of " + std::to_string(data_.size()));
+    if (pos_ > size_ || size_ - pos_ < n)
+      throw CdrError("truncated: need " + std::to_string(n) + " bytes at offset " + std::to_string(pos_) + " of " +
+                     std::to_string(size_));
   }
-  std::span<const uint8_t> data_;
+  // Moves to the segment holding pos_ (positions only grow). Callers checked pos_ < size_.
+  void Seek() {
+    while (pos_ >= seg_end_ && segment_ + 1 < segments_.size()) {
+      seg_begin_ = seg_end_;
+      seg_end_ += segments_[++segment_].size();
+    }
+  }
+  bool Contiguous(std::size_t n) {
+    Seek();
+    return pos_ + n <= seg_end_;
+  }
+  const uint8_t* At() const { return segments_[segment_].data() + (pos_ - seg_begin_); }
+  // Copies n bytes (checked with Need) from pos_ on, across segments if need be.
+  void CopyOut(void* out, std::size_t n) {
+    auto* dst = static_cast<uint8_t*>(out);
+    while (n > 0) {
+      Seek();
+      const std::size_t chunk = std::min(n, seg_end_ - pos_);
+      std::memcpy(dst, At(), chunk);
+      dst += chunk;
+      pos_ += chunk;
+      n -= chunk;
+    }
+  }
+  const std::span<const uint8_t> single_;
+  const std::span<const std::span<const uint8_t>> segments_;
+  std::size_t size_ = 0;       // all segments
+  std::size_t segment_ = 0;    // the segment holding pos_ (after Seek)
+  std::size_t seg_begin_ = 0;  // its first byte's offset in the message
+  std::size_t seg_end_ = 0;    // one past its last byte
   std::size_t pos_ = 0;
   bool swap_ = false;
 };

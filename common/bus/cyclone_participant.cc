@@ -4,6 +4,17 @@
 // rmw_cyclonedds do): the type name is the IDL's fully qualified name, the payload is the
 // project's XCDR1 bytes, and the instance key hash is the MD5 of the big-endian key fields, as
 // DDS specifies, so instances agree with Fast DDS.
+//
+// Large messages make every pass over their bytes count (a 640x480 image is 307 KB):
+//   - a typed publisher serializes into a buffer that the serdata then owns (no copy), and the
+//     buffers come back to a small pool of the topic's sertype when Cyclone frees the serdata;
+//   - a topic created by a typed subscriber (TopicSpec::codec) decodes each received sample
+//     straight from Cyclone's receive buffers (the fragments, not joined first) into the message
+//     the subscriber will take: one copy after the kernel's, as few as Cyclone's own typed path
+//     (which joins the fragments into its serdata, then deserializes into the application's
+//     sample). Readers without a codec (recorder) get bytes: on such a topic, re-encoded from
+//     the message (the same bytes for any well-formed little-endian sender; publishers pass
+//     no codec, so a recorder's own status publisher leaves its topics byte-exact).
 
 #include <dds/dds.h>
 #include <dds/ddsi/ddsi_serdata.h>
@@ -24,9 +35,35 @@
 namespace rslam::bus {
 namespace {
 
+// Spare serialization buffers of one topic: written samples' buffers come back here when
+// Cyclone frees them (after the readers acknowledged them), for the next Publish.
+class BufferPool {
+ public:
+  std::vector<uint8_t> Acquire() {
+    std::lock_guard lock(mutex_);
+    if (spare_.empty()) return {};
+    std::vector<uint8_t> buffer = std::move(spare_.back());
+    spare_.pop_back();
+    return buffer;
+  }
+  void Release(std::vector<uint8_t>&& buffer) {
+    if (buffer.capacity() < kMinPooledBytes) return;  // small ones are cheap to allocate
+    std::lock_guard lock(mutex_);
+    if (spare_.size() < kMaxSpare) spare_.push_back(std::move(buffer));
+  }
+
+ private:
+  static constexpr std::size_t kMinPooledBytes = 16 * 1024;
+  static constexpr std::size_t kMaxSpare = 4;
+  std::mutex mutex_;
+  std::vector<std::vector<uint8_t>> spare_;
+};
+
 struct RawSertype {
   ddsi_sertype base;  // first: Cyclone sees only this
   KeyReader key_reader;
+  const MessageCodec* codec;  // null: samples stay bytes
+  BufferPool pool;
 };
 
 struct RawSerdata {
@@ -34,6 +71,10 @@ struct RawSerdata {
   std::vector<uint8_t> bytes;  // CDR with encapsulation header, zero-padded to a multiple of 4
   uint32_t size = 0;           // CDR size without the padding
   ddsi_keyhash_t keyhash{};
+  // A received sample decoded on arrival (typed topics) has no bytes until someone asks for
+  // them (EncodedBytes).
+  DecodedMessage message;
+  std::once_flag encoded;
 };
 
 const RawSertype* AsRawType(const ddsi_sertype* t) { return reinterpret_cast<const RawSertype*>(t); }
@@ -70,8 +111,10 @@ std::size_t PaddedSize(std::size_t size) { return (size + 3) & ~std::size_t{3}; 
 // make every pass over the bytes count: no zero-filling of what is overwritten at once.)
 RawSerdata* NewSerdata(const ddsi_sertype* type, ddsi_serdata_kind kind, std::size_t size) {
   auto* d = new RawSerdata();
+  if (size >= 16 * 1024) d->bytes = const_cast<RawSertype*>(AsRawType(type))->pool.Acquire();
   ddsi_serdata_init(&d->base, type, kind);
   d->size = static_cast<uint32_t>(size);
+  d->bytes.clear();
   d->bytes.reserve(PaddedSize(size));
   return d;
 }
@@ -109,8 +152,66 @@ bool SerdataEqKey(const ddsi_serdata* a, const ddsi_serdata* b) {
 
 uint32_t SerdataSize(const ddsi_serdata* d) { return AsRaw(d)->size; }
 
+// The payload of a received sample as Cyclone holds it: fragments in order, possibly overlapping,
+// cut to back-to-back pieces. False if there are more than fit (then the caller joins them).
+bool CollectFragments(const nn_rdata* fragchain, size_t size, std::vector<std::span<const uint8_t>>& pieces) {
+  uint32_t off = 0;
+  for (; fragchain != nullptr; fragchain = fragchain->nextfrag) {
+    const uint32_t end = std::min<uint32_t>(fragchain->maxp1, static_cast<uint32_t>(size));
+    if (end <= off) continue;
+    const unsigned char* payload = NN_RMSG_PAYLOADOFF(fragchain->rmsg, NN_RDATA_PAYLOAD_OFF(fragchain));
+    pieces.emplace_back(payload + (off - fragchain->min), end - off);
+    off = end;
+  }
+  return off == size;
+}
+
+// A typed topic's data sample decoded straight from the fragments, or null (not a typed topic,
+// malformed, or the key not within the first fragment: the caller keeps bytes instead).
+RawSerdata* DecodeFromFragments(const ddsi_sertype* type, ddsi_serdata_kind kind, const nn_rdata* fragchain,
+                                size_t size) {
+  const RawSertype* raw_type = AsRawType(type);
+  if (raw_type->codec == nullptr || kind != SDK_DATA) return nullptr;
+  thread_local std::vector<std::span<const uint8_t>> pieces;
+  pieces.clear();
+  if (!CollectFragments(fragchain, size, pieces) || pieces.empty()) return nullptr;
+  auto* d = new RawSerdata();
+  ddsi_serdata_init(&d->base, type, kind);
+  d->size = static_cast<uint32_t>(size);
+  try {
+    CdrReader reader{std::span<const std::span<const uint8_t>>(pieces)};
+    d->message = DecodedMessage(raw_type->codec->decode(reader), raw_type->codec);
+    if (raw_type->key_reader != nullptr) {
+      CdrKeyWriter key;
+      raw_type->key_reader(pieces.front(), key);
+      ddsrt_md5_state_t md5;
+      ddsrt_md5_init(&md5);
+      ddsrt_md5_append(&md5, key.bytes().data(), static_cast<uint32_t>(key.bytes().size()));
+      ddsrt_md5_finish(&md5, d->keyhash.value);
+    }
+  } catch (const CdrError&) {
+    delete d;
+    return nullptr;
+  }
+  d->base.hash = HashKey(d->keyhash) ^ type->serdata_basehash;
+  return d;
+}
+
+// The bytes of a sample, encoded from its decoded message on first use.
+const std::vector<uint8_t>& EncodedBytes(const ddsi_serdata* serdata) {
+  auto* d = const_cast<RawSerdata*>(AsRaw(serdata));
+  std::call_once(d->encoded, [d] {
+    if (!d->message || !d->bytes.empty()) return;
+    d->message.codec()->encode(d->message.get(), d->bytes);
+    d->size = static_cast<uint32_t>(d->bytes.size());
+    Pad(d);
+  });
+  return d->bytes;
+}
+
 ddsi_serdata* SerdataFromSer(const ddsi_sertype* type, ddsi_serdata_kind kind, const nn_rdata* fragchain,
                              size_t size) {
+  if (RawSerdata* decoded = DecodeFromFragments(type, kind, fragchain, size)) return &decoded->base;
   RawSerdata* d = NewSerdata(type, kind, size);
   // The fragments come in order and may overlap: append the part of each beyond what we have.
   uint32_t off = 0;
@@ -156,15 +257,14 @@ ddsi_serdata* SerdataFromSample(const ddsi_sertype* type, ddsi_serdata_kind kind
 }
 
 void SerdataToSer(const ddsi_serdata* d, size_t off, size_t sz, void* buf) {
-  const RawSerdata* r = AsRaw(d);
-  const std::size_t avail = off < r->bytes.size() ? r->bytes.size() - off : 0;
-  std::memcpy(buf, r->bytes.data() + off, std::min(sz, avail));
+  const std::vector<uint8_t>& bytes = EncodedBytes(d);
+  const std::size_t avail = off < bytes.size() ? bytes.size() - off : 0;
+  std::memcpy(buf, bytes.data() + off, std::min(sz, avail));
   if (sz > avail) std::memset(static_cast<char*>(buf) + avail, 0, sz - avail);
 }
 
 ddsi_serdata* SerdataToSerRef(const ddsi_serdata* d, size_t off, size_t sz, ddsrt_iovec_t* ref) {
-  const RawSerdata* r = AsRaw(d);
-  ref->iov_base = const_cast<uint8_t*>(r->bytes.data() + off);
+  ref->iov_base = const_cast<uint8_t*>(EncodedBytes(d).data() + off);
   ref->iov_len = static_cast<ddsrt_iov_len_t>(sz);
   return ddsi_serdata_ref(d);
 }
@@ -172,8 +272,8 @@ ddsi_serdata* SerdataToSerRef(const ddsi_serdata* d, size_t off, size_t sz, ddsr
 void SerdataToSerUnref(ddsi_serdata* d, const ddsrt_iovec_t*) { ddsi_serdata_unref(d); }
 
 bool SerdataToSample(const ddsi_serdata* d, void* sample, void**, void*) {
-  const RawSerdata* r = AsRaw(d);
-  static_cast<CycloneSample*>(sample)->cdr.assign(r->bytes.begin(), r->bytes.begin() + r->size);
+  const std::vector<uint8_t>& bytes = EncodedBytes(d);
+  static_cast<CycloneSample*>(sample)->cdr.assign(bytes.begin(), bytes.begin() + AsRaw(d)->size);
   return true;
 }
 
@@ -190,7 +290,11 @@ bool UntypedToSample(const ddsi_sertype*, const ddsi_serdata*, void* sample, voi
   return true;
 }
 
-void SerdataFree(ddsi_serdata* d) { delete AsRaw(d); }
+void SerdataFree(ddsi_serdata* d) {
+  RawSerdata* r = AsRaw(d);
+  if (d->type != nullptr) const_cast<RawSertype*>(AsRawType(d->type))->pool.Release(std::move(r->bytes));
+  delete r;
+}
 
 size_t SerdataPrint(const ddsi_sertype*, const ddsi_serdata* d, char* buf, size_t size) {
   return static_cast<size_t>(std::snprintf(buf, size, "cdr(%u bytes)", AsRaw(d)->size));
@@ -245,7 +349,7 @@ void SertypeFreeSamples(const ddsi_sertype*, void** ptrs, size_t count, dds_free
 }
 
 bool SertypeEqual(const ddsi_sertype* a, const ddsi_sertype* b) {
-  return AsRawType(a)->key_reader == AsRawType(b)->key_reader;
+  return AsRawType(a)->key_reader == AsRawType(b)->key_reader && AsRawType(a)->codec == AsRawType(b)->codec;
 }
 
 uint32_t SertypeHash(const ddsi_sertype*) { return 0x7a1d5e11u; }
@@ -333,15 +437,19 @@ class CycloneWriter final : public RawWriter {
   CycloneWriter(dds_entity_t writer, const ddsi_sertype* type) : writer_(writer), type_(type) {}
   ~CycloneWriter() override { dds_delete(writer_); }
 
-  void Write(std::span<const uint8_t> cdr) override {
-    RawSerdata* d = NewSerdataFrom(type_, SDK_DATA, cdr);
-    try {
-      ComputeKeyHash(d, AsRawType(type_));
-    } catch (const CdrError& e) {
-      delete d;
-      throw BusError(std::string("cannot publish a malformed message: ") + e.what());
-    }
-    Check(dds_writecdr(writer_, &d->base), "write");  // takes ownership of d
+  void Write(std::span<const uint8_t> cdr) override { Write(NewSerdataFrom(type_, SDK_DATA, cdr)); }
+
+  void WriteOwned(std::vector<uint8_t>&& cdr) override {
+    auto* d = new RawSerdata();
+    ddsi_serdata_init(&d->base, type_, SDK_DATA);
+    d->size = static_cast<uint32_t>(cdr.size());
+    d->bytes = std::move(cdr);
+    Pad(d);
+    Write(d);
+  }
+
+  std::vector<uint8_t> AcquireBuffer() override {
+    return const_cast<RawSertype*>(AsRawType(type_))->pool.Acquire();
   }
 
   int MatchedReaders() const override {
@@ -355,13 +463,23 @@ class CycloneWriter final : public RawWriter {
   }
 
  private:
+  void Write(RawSerdata* d) {
+    try {
+      ComputeKeyHash(d, AsRawType(type_));
+    } catch (const CdrError& e) {
+      delete d;
+      throw BusError(std::string("cannot publish a malformed message: ") + e.what());
+    }
+    Check(dds_writecdr(writer_, &d->base), "write");  // takes ownership of d
+  }
+
   const dds_entity_t writer_;
   const ddsi_sertype* const type_;
 };
 
 class CycloneReader final : public RawReader {
  public:
-  CycloneReader() = default;
+  explicit CycloneReader(bool wants_decoded) : wants_decoded_(wants_decoded) {}
   ~CycloneReader() override {
     if (reader_ > 0) dds_delete(reader_);
   }
@@ -395,8 +513,15 @@ class CycloneReader final : public RawReader {
           RawSerdata* r = AsRaw(batch[i]);
           RawSample sample;
           // Our reference is the last one (no other reader of this process holds the sample):
-          // hand its bytes over instead of copying them. Nobody can take a new reference now.
-          if (ddsrt_atomic_ld32(&batch[i]->refc) == 1) {
+          // hand its message or bytes over instead of copying them. Nobody can take a new
+          // reference now.
+          const bool last = ddsrt_atomic_ld32(&batch[i]->refc) == 1;
+          if (r->message && wants_decoded_) {
+            sample.message = last ? std::move(r->message) : r->message.Copy();
+          } else if (r->message) {
+            const std::vector<uint8_t>& bytes = EncodedBytes(batch[i]);
+            sample.cdr.assign(bytes.begin(), bytes.begin() + r->size);
+          } else if (last) {
             sample.cdr = std::move(r->bytes);
             sample.cdr.resize(r->size);
           } else {
@@ -433,6 +558,7 @@ class CycloneReader final : public RawReader {
     cv_.notify_all();
   }
 
+  const bool wants_decoded_;
   dds_entity_t reader_ = 0;
   std::mutex mutex_;
   std::condition_variable cv_;
@@ -477,7 +603,7 @@ class CycloneParticipant final : public Participant {
     dds_qset_partition(qos.get(), 1, &partition);
     const dds_entity_t subscriber = dds_create_subscriber(participant_, qos.get(), nullptr);
     Check(subscriber, "create subscriber for " + spec.topic);
-    auto reader = std::make_unique<CycloneReader>();
+    auto reader = std::make_unique<CycloneReader>(spec.codec != nullptr);
     dds_listener_t* listener = dds_create_listener(reader.get());
     dds_lset_data_available(listener, &CycloneReader::OnDataAvailable);
     const dds_entity_t handle = dds_create_reader(subscriber, topic, qos.get(), listener);
@@ -498,6 +624,7 @@ class CycloneParticipant final : public Participant {
     }
     auto* st = new RawSertype();
     st->key_reader = spec.key_reader;
+    st->codec = spec.codec;
     ddsi_sertype_init_flags(&st->base, spec.type_name.c_str(), &kSertypeOps, &kSerdataOps,
                             spec.key_reader == nullptr ? DDSI_SERTYPE_FLAG_TOPICKIND_NO_KEY : 0u);
     st->base.allowed_data_representation = DDS_DATA_REPRESENTATION_FLAG_XCDR1;

@@ -14,6 +14,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/bus/bus_config.h"
@@ -31,6 +32,49 @@ class BusError : public std::runtime_error {
 // writer; throws CdrError on a malformed message.
 using KeyReader = void (*)(std::span<const uint8_t> cdr, CdrKeyWriter& key);
 
+// One message type's typed operations, type-erased (typed_cdr.h: CodecFor<T>()). A vendor given a
+// codec may decode a received message straight from its receive buffers (one pass over a large
+// message fewer than joining the fragments, then decoding).
+struct MessageCodec {
+  void* (*decode)(CdrReader& reader);                          // a new T; throws CdrError
+  void (*encode)(const void* message, std::vector<uint8_t>& out);  // appends CDR
+  void* (*copy)(const void* message);                          // a new T
+  void (*destroy)(void* message);
+};
+
+// A decoded message of the codec's type (owned; move-only).
+class DecodedMessage {
+ public:
+  DecodedMessage() = default;
+  DecodedMessage(void* message, const MessageCodec* codec) : message_(message), codec_(codec) {}
+  DecodedMessage(DecodedMessage&& other) noexcept
+      : message_(std::exchange(other.message_, nullptr)), codec_(other.codec_) {}
+  DecodedMessage& operator=(DecodedMessage&& other) noexcept {
+    if (this != &other) {
+      Reset();
+      message_ = std::exchange(other.message_, nullptr);
+      codec_ = other.codec_;
+    }
+    return *this;
+  }
+  DecodedMessage(const DecodedMessage&) = delete;
+  DecodedMessage& operator=(const DecodedMessage&) = delete;
+  ~DecodedMessage() { Reset(); }
+
+  explicit operator bool() const { return message_ != nullptr; }
+  void* get() const { return message_; }
+  const MessageCodec* codec() const { return codec_; }
+  DecodedMessage Copy() const { return message_ ? DecodedMessage(codec_->copy(message_), codec_) : DecodedMessage(); }
+  void Reset() {
+    if (message_ != nullptr) codec_->destroy(message_);
+    message_ = nullptr;
+  }
+
+ private:
+  void* message_ = nullptr;
+  const MessageCodec* codec_ = nullptr;
+};
+
 struct TopicSpec {
   std::string topic;        // e.g. "camera/image"
   std::string type_name;    // e.g. "rslam::msg::Image"
@@ -38,10 +82,14 @@ struct TopicSpec {
   QosPreset qos = QosPreset::kStream;
   // Partition: a robot id to publish in or listen to, or "*" to listen to every robot.
   std::string partition;
+  // Typed subscribers pass their type's codec: their samples may then arrive decoded
+  // (RawSample::message). Readers without one always get bytes.
+  const MessageCodec* codec = nullptr;
 };
 
 struct RawSample {
-  std::vector<uint8_t> cdr;       // with the 4-byte encapsulation header
+  std::vector<uint8_t> cdr;       // with the 4-byte encapsulation header; empty if message is set
+  DecodedMessage message;         // only for readers with a codec, when the vendor decoded it
   int64_t source_timestamp_ns = 0;  // DDS source timestamp (write time), not the frame stamp
 };
 
@@ -51,9 +99,20 @@ class RawWriter {
   // Publishes serialized CDR (with encapsulation header). Throws BusError on failure, including
   // a reliable writer blocked longer than the preset allows.
   virtual void Write(std::span<const uint8_t> cdr) = 0;
+  // The same, handing the buffer over (no copy where the vendor can keep it), and a buffer to
+  // serialize the next message into (a recycled one where the vendor pools them). Not
+  // thread-safe: Publisher serializes its calls.
+  virtual void WriteOwned(std::vector<uint8_t>&& cdr) {
+    Write(cdr);
+    spare_ = std::move(cdr);
+  }
+  virtual std::vector<uint8_t> AcquireBuffer() { return std::move(spare_); }
   virtual int MatchedReaders() const = 0;
   // Waits until every matched reliable reader acknowledged everything written.
   virtual bool WaitForAcknowledgments(std::chrono::milliseconds timeout) = 0;
+
+ private:
+  std::vector<uint8_t> spare_;
 };
 
 class RawReader {

@@ -25,9 +25,11 @@ class Publisher {
   // Thread-safe. Throws BusError if a reliable reader stays blocked beyond the preset's limit.
   void Publish(const T& msg) {
     std::lock_guard lock(mutex_);
-    buffer_.clear();
-    AppendCdr(msg, buffer_);
-    writer_->Write(buffer_);
+    // Serialized straight into a buffer the vendor keeps (no copy of an image on the way).
+    std::vector<uint8_t> buffer = writer_->AcquireBuffer();
+    buffer.clear();
+    AppendCdr(msg, buffer);
+    writer_->WriteOwned(std::move(buffer));
     ++published_;
   }
 
@@ -50,7 +52,6 @@ class Publisher {
  private:
   std::unique_ptr<RawWriter> writer_;
   std::mutex mutex_;
-  std::vector<uint8_t> buffer_;
   std::atomic<uint64_t> published_{0};
 };
 

@@ -35,7 +35,8 @@ class Subscriber {
       : topic_name_(topic.name),
         reader_(participant.CreateRawReader(TopicSpec{std::string(topic.name), MessageTraits<T>::kTypeName,
                                                       KeyReaderFor<T>(), topic.qos,
-                                                      partition.empty() ? participant.robot_id() : partition})) {}
+                                                      partition.empty() ? participant.robot_id() : partition,
+                                                      CodecFor<T>()})) {}
 
   Subscriber(Participant& participant, const Topic<T>& topic, Callback callback, std::string partition = {})
       : Subscriber(participant, topic, std::move(partition)) {
@@ -60,7 +61,7 @@ class Subscriber {
     reader_->Take(raw_, max);
     std::vector<T> out;
     out.reserve(raw_.size());
-    for (const auto& sample : raw_) {
+    for (auto& sample : raw_) {
       if (auto msg = Parse(sample)) out.push_back(std::move(*msg));
     }
     return out;
@@ -96,7 +97,11 @@ class Subscriber {
   uint64_t rejected() const { return rejected_; }
 
  private:
-  std::optional<T> Parse(const RawSample& sample) {
+  std::optional<T> Parse(RawSample& sample) {
+    if (sample.message) {  // decoded by the vendor as it arrived
+      ++received_;
+      return std::move(*static_cast<T*>(sample.message.get()));
+    }
     try {
       T msg = FromCdr<T>(sample.cdr);
       ++received_;
@@ -113,7 +118,7 @@ class Subscriber {
       if (!reader_->Wait(std::chrono::milliseconds(200))) continue;
       batch.clear();
       reader_->Take(batch, 64);
-      for (const auto& sample : batch) {
+      for (auto& sample : batch) {
         if (stop_) return;
         if (auto msg = Parse(sample)) callback_(*msg);
       }

@@ -1,6 +1,7 @@
 #pragma once
 // Typed (de)serialization of generated message types to and from CDR buffers.
 
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -37,6 +38,21 @@ template <Message T>
 void ReadKey(std::span<const uint8_t> cdr, CdrKeyWriter& key) {
   CdrReader reader(cdr);
   ReadKeyFields(reader, key, static_cast<T*>(nullptr));
+}
+
+template <Message T>
+const MessageCodec* CodecFor() {
+  static constexpr MessageCodec kCodec{
+      .decode = [](CdrReader& reader) -> void* {
+        auto msg = std::make_unique<T>();
+        Deserialize(reader, *msg);
+        return msg.release();
+      },
+      .encode = [](const void* msg, std::vector<uint8_t>& out) { AppendCdr(*static_cast<const T*>(msg), out); },
+      .copy = [](const void* msg) -> void* { return new T(*static_cast<const T*>(msg)); },
+      .destroy = [](void* msg) { delete static_cast<T*>(msg); },
+  };
+  return &kCodec;
 }
 
 template <Message T>

@@ -75,6 +75,46 @@ TEST_P(BusTest, Image640x480ArrivesIntact) {
   EXPECT_EQ(got->data, image.data);
 }
 
+// Typed readers may get images decoded by the vendor as they arrive; readers of the same topic in
+// the same participant must still each get the whole image: a second typed reader (the sample is
+// shared, so neither may take it from the other) and a raw reader (bytes, as the recorder).
+TEST_P(BusTest, ImageReachesTwoTypedReadersAndARawReaderOfOneParticipant) {
+  auto writer = MakeWriter();
+  auto reader = MakeReader();
+  Publisher<msg::Image> pub(*writer, topics::kCameraImage);
+  Subscriber<msg::Image> first(*reader, topics::kCameraImage);
+  Subscriber<msg::Image> second(*reader, topics::kCameraImage);
+  auto raw = reader->CreateRawReader(TopicSpec{"camera/image", "rslam::msg::Image", KeyReaderFor<msg::Image>(),
+                                               topics::kCameraImage.qos, "robot1"});
+  ASSERT_TRUE(pub.WaitForSubscribers(3, 10s));
+  ASSERT_TRUE(first.WaitForPublishers(1, 10s));
+  ASSERT_TRUE(second.WaitForPublishers(1, 10s));
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (raw->MatchedWriters() < 1 && std::chrono::steady_clock::now() < deadline) raw->Wait(10ms);
+  msg::Image image;
+  image.header = {"robot1", 7, 123};
+  image.width = 640;
+  image.height = 480;
+  image.encoding = "mono8";
+  image.step = 640;
+  image.data.resize(640 * 480);
+  for (std::size_t i = 0; i < image.data.size(); ++i) image.data[i] = static_cast<uint8_t>((i * 17) ^ (i >> 11));
+  pub.Publish(image);
+  std::vector<RawSample> samples;
+  while (samples.empty() && std::chrono::steady_clock::now() < deadline) {
+    raw->Wait(100ms);
+    raw->Take(samples, 10);
+  }
+  ASSERT_EQ(samples.size(), 1u);
+  EXPECT_FALSE(samples[0].message);
+  EXPECT_EQ(samples[0].cdr, ToCdr(image));
+  for (Subscriber<msg::Image>* sub : {&first, &second}) {
+    auto got = sub->TakeOne(10s);
+    ASSERT_TRUE(got.has_value());
+    EXPECT_EQ(*got, image);
+  }
+}
+
 TEST_P(BusTest, RawCdrTakenDecodesToTheTypedMessage) {
   auto writer = MakeWriter();
   auto reader = MakeReader();

@@ -94,5 +94,49 @@ TEST(CdrTest, TruncatedOrCorruptMessagesAreRefused) {
   EXPECT_THROW(FromCdr<msg::Image>(xcdr2), CdrError);
 }
 
+// Cyclone hands a received sample over as network fragments; the reader decodes them without
+// joining them first. Every cut (inside the header, a string, a number, the pixels) must decode
+// to the same message, and a truncated last piece must still be refused.
+TEST(CdrTest, MessageInPiecesDecodesAsTheWhole) {
+  msg::Image image;
+  image.header = {"robot7", 99, -5};
+  image.width = 8;
+  image.height = 4;
+  image.encoding = "mono8";
+  image.step = 8;
+  image.data.resize(32);
+  for (std::size_t i = 0; i < image.data.size(); ++i) image.data[i] = static_cast<uint8_t>(i * 13 + 1);
+  const std::vector<uint8_t> cdr = ToCdr(image);
+  const std::span<const uint8_t> all(cdr);
+  for (std::size_t a = 1; a < cdr.size(); ++a) {
+    for (std::size_t b : {a, std::min(cdr.size(), a + 3), std::min(cdr.size(), a + 17)}) {
+      const std::span<const uint8_t> pieces[] = {all.subspan(0, a), all.subspan(a, b - a), all.subspan(b)};
+      CdrReader reader{std::span<const std::span<const uint8_t>>(pieces)};
+      msg::Image got;
+      Deserialize(reader, got);
+      EXPECT_EQ(got, image) << "cut at " << a << " and " << b;
+    }
+    const std::span<const uint8_t> truncated[] = {all.subspan(0, a), all.subspan(a, cdr.size() - a - 4 - 1)};
+    if (a < cdr.size() - 5) {
+      CdrReader reader{std::span<const std::span<const uint8_t>>(truncated)};
+      msg::Image got;
+      EXPECT_THROW(Deserialize(reader, got), CdrError) << "cut at " << a;
+    }
+  }
+}
+
+// A message decoded into one that already holds a larger image keeps no stale bytes.
+TEST(CdrTest, DecodingIntoAUsedMessageReplacesEverything) {
+  msg::Image small;
+  FillExample(small, 2);
+  msg::Image big;
+  FillExample(big, 3);
+  big.data.assign(1000, 7);
+  const std::vector<uint8_t> cdr = ToCdr(small);
+  CdrReader reader(cdr);
+  Deserialize(reader, big);
+  EXPECT_EQ(big, small);
+}
+
 }  // namespace
 }  // namespace rslam::bus
