@@ -73,24 +73,44 @@ void WeightedSumPortable(float* __restrict dst, const float* const* src, const f
 }
 
 #if defined(__x86_64__)
+// kBlocks vectors of 8 cells from x on, each with its own accumulator: the taps are added to
+// each cell in the same order as one vector at a time would, but the kBlocks addition chains
+// are independent, so the adds overlap instead of waiting on each other's latency. The last
+// block loads and stores only the lanes in last_mask (nothing read or written past them).
+template <int kBlocks>
+__attribute__((target("avx2"))) inline void WeightedSumBlocksAvx2(float* __restrict dst, const float* const* src,
+                                                                  const float* w, int taps, int x, __m256i last_mask) {
+  __m256 acc[kBlocks];
+  for (int b = 0; b < kBlocks; ++b) acc[b] = _mm256_setzero_ps();
+  for (int k = 0; k < taps; ++k) {
+    const __m256 weight = _mm256_set1_ps(w[k]);
+    const float* s = src[k] + x;
+    for (int b = 0; b + 1 < kBlocks; ++b) {
+      acc[b] = _mm256_add_ps(acc[b], _mm256_mul_ps(weight, _mm256_loadu_ps(s + 8 * b)));
+    }
+    acc[kBlocks - 1] = _mm256_add_ps(
+        acc[kBlocks - 1], _mm256_mul_ps(weight, _mm256_maskload_ps(s + 8 * (kBlocks - 1), last_mask)));
+  }
+  for (int b = 0; b + 1 < kBlocks; ++b) _mm256_storeu_ps(dst + x + 8 * b, acc[b]);
+  _mm256_maskstore_ps(dst + x + 8 * (kBlocks - 1), last_mask, acc[kBlocks - 1]);
+}
+
 __attribute__((target("avx2"))) void WeightedSumAvx2(float* __restrict dst, const float* const* src, const float* w,
                                                      int taps, int lo, int hi) {
+  const __m256i all = _mm256_set1_epi32(-1);
   int x = lo;
-  for (; x + 8 <= hi; x += 8) {
-    __m256 acc = _mm256_setzero_ps();
-    for (int k = 0; k < taps; ++k) {
-      acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_set1_ps(w[k]), _mm256_loadu_ps(src[k] + x)));
-    }
-    _mm256_storeu_ps(dst + x, acc);
-  }
-  if (x < hi) {  // the last 1..7 cells: masked loads (nothing read past them) and a masked store
-    const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    const __m256i mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(hi - x), lanes);
-    __m256 acc = _mm256_setzero_ps();
-    for (int k = 0; k < taps; ++k) {
-      acc = _mm256_add_ps(acc, _mm256_mul_ps(_mm256_set1_ps(w[k]), _mm256_maskload_ps(src[k] + x, mask)));
-    }
-    _mm256_maskstore_ps(dst + x, mask, acc);
+  for (; hi - x > 32; x += 32) WeightedSumBlocksAvx2<4>(dst, src, w, taps, x, all);
+  // The last 1..32 cells in 1..4 blocks, the last one masked to the cells that remain.
+  const int remaining = hi - x;
+  if (remaining <= 0) return;
+  const int blocks = (remaining + 7) / 8;
+  const __m256i lanes = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i last_mask = _mm256_cmpgt_epi32(_mm256_set1_epi32(remaining - 8 * (blocks - 1)), lanes);
+  switch (blocks) {
+    case 1: WeightedSumBlocksAvx2<1>(dst, src, w, taps, x, last_mask); break;
+    case 2: WeightedSumBlocksAvx2<2>(dst, src, w, taps, x, last_mask); break;
+    case 3: WeightedSumBlocksAvx2<3>(dst, src, w, taps, x, last_mask); break;
+    default: WeightedSumBlocksAvx2<4>(dst, src, w, taps, x, last_mask); break;
   }
 }
 #endif
@@ -113,6 +133,42 @@ WeightedSumFunction BestWeightedSum() {
 void WeightedSum(float* __restrict dst, const float* const* src, const float* w, int taps, int lo, int hi) {
   static const WeightedSumFunction best = BestWeightedSum();
   best(dst, src, w, taps, lo, hi);
+}
+
+// Per-cell loops over one run of a row. Written so the compiler vectorises them (no aliasing,
+// no branches): each cell's result is computed on its own, so vector and scalar code agree.
+
+// member[x] |= (e[x] >= global and e[x] > 0) for x in [b, end); non-zero when any cell passed.
+uint8_t MarkStrong(const float* __restrict e, uint8_t* __restrict member, float global, int b, int end) {
+  uint8_t any = 0;
+  for (int x = b; x < end; ++x) {
+    const uint8_t strong = static_cast<uint8_t>((e[x] >= global) & (e[x] > 0.0f));
+    member[x] |= strong;
+    any |= strong;
+  }
+  return any;
+}
+
+// member[x] |= (row[x] != 0) for x in [b, end); non-zero when any cell is non-zero.
+uint8_t MarkNonZero(const float* __restrict row, uint8_t* __restrict member, int b, int end) {
+  uint8_t any = 0;
+  for (int x = b; x < end; ++x) {
+    const uint8_t non_zero = static_cast<uint8_t>(row[x] != 0.0f);
+    member[x] |= non_zero;
+    any |= non_zero;
+  }
+  return any;
+}
+
+// a[x] = max(e[x] - inh[x] - global, 0) and inh[x] = 0 for x in [b, end). The same float as
+// "v = e - inh; v >= global ? v - global : 0": v - global is >= +0 exactly when v >= global
+// (IEEE subtraction of distinct finite floats never rounds to zero), and +0 when equal.
+void ClampedDifference(const float* __restrict e, float* __restrict inh, float* __restrict a, float global, int b,
+                       int end) {
+  for (int x = b; x < end; ++x) {
+    a[x] = std::max(e[x] - inh[x] - global, 0.0f);
+    inh[x] = 0.0f;
+  }
 }
 
 double MinDelta(double a, double b, double n) {
@@ -187,18 +243,32 @@ void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, con
   for (int t : ts.index) {
     for (int y : ys.index) {
       const float* row = &activity_[Flat(0, y, t)];
+      uint8_t any = 0;
+      for (auto [b, e] : xs.runs) any |= MarkNonZero(row, xs_.member.data(), b, e);
+      if (!any) {
+        rows_act_[Row(y, t)] = RowExtent{};
+        continue;
+      }
+      // The row's first and last non-zero cells (runs ascend): found from each end.
       int lo = dim_xy_, hi = 0;
-      for (auto [b, e] : xs.runs) {
-        for (int x = b; x < e; ++x) {
+      for (auto it = xs.runs.begin(); it != xs.runs.end() && lo == dim_xy_; ++it) {
+        for (int x = it->first; x < it->second; ++x) {
           if (row[x] != 0.0f) {
-            xs_.member[x] = 1;
-            lo = std::min(lo, x);
-            hi = x + 1;
+            lo = x;
+            break;
           }
         }
       }
-      rows_act_[Row(y, t)] = lo < hi ? RowExtent{lo, hi} : RowExtent{};
-      if (lo < hi) ys_.member[y] = ts_.member[t] = 1;
+      for (auto it = xs.runs.rbegin(); it != xs.runs.rend() && hi == 0; ++it) {
+        for (int x = it->second - 1; x >= it->first; --x) {
+          if (row[x] != 0.0f) {
+            hi = x + 1;
+            break;
+          }
+        }
+      }
+      rows_act_[Row(y, t)] = RowExtent{lo, hi};
+      ys_.member[y] = ts_.member[t] = 1;
     }
   }
   xs_.Finish();
@@ -343,14 +413,8 @@ void PoseCellNetwork::ExciteInhibitNormalise() {
     for (int y : ex_ys_.index) {
       if (rows_c_[Row(y, t)].empty()) continue;
       const float* e = &buf_c_[Flat(0, y, t)];
-      bool any = false;
-      for (auto [b, end] : ex_xs_.runs) {
-        for (int x = b; x < end; ++x) {  // branch-free: which cells pass is unpredictable
-          const uint8_t strong = static_cast<uint8_t>((e[x] >= global) & (e[x] > 0.0f));
-          tmp_xs_.member[x] |= strong;
-          any |= strong != 0;
-        }
-      }
+      uint8_t any = 0;  // branch-free: which cells pass is unpredictable
+      for (auto [b, end] : ex_xs_.runs) any |= MarkStrong(e, tmp_xs_.member.data(), global, b, end);
       if (any) tmp_ys_.member[y] = tmp_ts_.member[t] = 1;
     }
   }
@@ -376,15 +440,10 @@ void PoseCellNetwork::ExciteInhibitNormalise() {
         for (auto [b, end] : tmp_xs_.runs) std::fill(inh + b, inh + end, 0.0f);
         continue;
       }
-      float row_total = 0.0f;
+      for (auto [b, end] : tmp_xs_.runs) ClampedDifference(e, inh, a, global, b, end);
+      float row_total = 0.0f;  // in cell order, as the activity is normalised by it
       for (auto [b, end] : tmp_xs_.runs) {
-        for (int x = b; x < end; ++x) {
-          float v = e[x] - inh[x];
-          v = v >= global ? v - global : 0.0f;
-          a[x] = v;
-          row_total += v;
-          inh[x] = 0.0f;
-        }
+        for (int x = b; x < end; ++x) row_total += a[x];
       }
       total += row_total;
     }
