@@ -21,4 +21,13 @@ double JeffreySelfTerm(std::span<const float> h);
 // d_J from precomputed self terms (no checks: the hot path).
 double JeffreyDivergenceFromSelfTerms(std::span<const float> h, double self_h, std::span<const float> k, double self_k);
 
+// A cheap lower bound of d_J(H, K) (no logarithms), for skipping histograms that cannot be the
+// closest. Per bin, with s = h + k and t = (h - k) / s, eq. 1's term is
+//   s/2 [(1 + t) log(1 + t) + (1 - t) log(1 - t)] = s/2 (t^2 + t^4/6 + t^6/15 + ...) >= s t^2 / 2,
+// so d_J >= sum_i (h_i - k_i)^2 / (2 (h_i + k_i)) (half the triangular discrimination; tight
+// for similar histograms, which are the ones that matter). Returned 0.1% and 1e-5 below that,
+// which covers float rounding in both this and the divergence as computed, so a histogram whose
+// bound exceeds a value also has a computed divergence above it. Any non-negative histograms.
+double JeffreyDivergenceLowerBound(std::span<const float> h, std::span<const float> k);
+
 }  // namespace rslam::templates

@@ -339,13 +339,40 @@ TemplateLibrary::Best TemplateLibrary::BestHistogramMatch(const EncodedView& vie
   std::vector<std::pair<double, uint32_t>> candidates;
   best_divergence = kInfinity;
   const auto count = static_cast<uint32_t>(size());
+  // Only the max_candidates lowest (divergence, id) candidates are refined, so once that many
+  // are known a divergence above the largest of them cannot matter (ids ascend: a tie with it
+  // sorts after it). kept_divergences: those lowest divergences so far, as a max-heap.
+  const std::size_t max_candidates = static_cast<std::size_t>(std::max(0, config_.histogram_max_candidates));
+  std::vector<double> kept_divergences;
+  kept_divergences.reserve(max_candidates);
   for (uint32_t id = 0; id < count; ++id) {
     const std::span<const float> stored(histograms_.data() + static_cast<std::size_t>(id) * bins, bins);
+    // A histogram whose divergence is surely above the smallest so far and above what a kept
+    // candidate can have changes nothing: skip its logarithms. The kept candidates and
+    // best_divergence are exactly those of computing every divergence.
+    const double candidate_limit = max_candidates == 0 ? -kInfinity
+                                   : kept_divergences.size() < max_candidates
+                                       ? config_.histogram_divergence_threshold
+                                       : kept_divergences.front();
+    if (best_divergence < kInfinity &&
+        JeffreyDivergenceLowerBound(view.histogram, stored) > std::max(best_divergence, candidate_limit)) {
+      continue;
+    }
     const double d = JeffreyDivergenceFromSelfTerms(view.histogram, self, stored, histogram_self_terms_[id]);
     best_divergence = std::min(best_divergence, d);
-    if (d <= config_.histogram_divergence_threshold) candidates.emplace_back(d, id);
+    if (d <= config_.histogram_divergence_threshold) {
+      candidates.emplace_back(d, id);
+      if (kept_divergences.size() < max_candidates) {
+        kept_divergences.push_back(d);
+        std::push_heap(kept_divergences.begin(), kept_divergences.end());
+      } else if (max_candidates > 0 && d < kept_divergences.front()) {
+        std::pop_heap(kept_divergences.begin(), kept_divergences.end());
+        kept_divergences.back() = d;
+        std::push_heap(kept_divergences.begin(), kept_divergences.end());
+      }
+    }
   }
-  const std::size_t keep = std::min<std::size_t>(candidates.size(), config_.histogram_max_candidates);
+  const std::size_t keep = std::min<std::size_t>(candidates.size(), max_candidates);
   std::partial_sort(candidates.begin(), candidates.begin() + keep, candidates.end());
   Best best;
   double best_rotation_difference = kInfinity;

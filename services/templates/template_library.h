@@ -38,6 +38,11 @@
 // differs from the view's by more than match_threshold + 0.005 (OpenRatSLAM's prefilter). So a
 // matched view's difference is exact, but a new view's `difference` is only a lower bound
 // (> threshold in practice) of its best difference. Differences() is always exact and exhaustive.
+// Histogram mode skips the logarithms of a stored histogram whose cheap lower bound of the
+// divergence (JeffreyDivergenceLowerBound) is above the smallest divergence so far and above
+// what a refined candidate can have (the threshold, or the largest of the
+// histogram_max_candidates lowest candidates once that many are known): the refined candidates
+// and the reported smallest divergence stay exact.
 //
 // Deterministic; not thread-safe for concurrent mutation; bad images throw std::invalid_argument.
 

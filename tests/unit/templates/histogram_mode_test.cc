@@ -2,6 +2,7 @@
 // 36 rotations with the camera's dead zone masked.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -123,6 +124,100 @@ TEST(HistogramModeTest, RoundTripsHistogramsAndRefusesABadOne) {
   TemplateConfig other_dead_zone = Panorama();
   other_dead_zone.dead_zone_columns = {0};
   EXPECT_THROW(TemplateLibrary::FromProto(state, other_dead_zone), std::invalid_argument);
+}
+
+// The library skips histograms by this bound, so it must never exceed the divergence.
+TEST(HistogramModeTest, JeffreyLowerBoundNeverExceedsTheDivergence) {
+  cv::RNG rng(2024);
+  auto normalised = [](std::vector<float> v) {
+    double total = 0;
+    for (float x : v) total += x;
+    for (float& x : v) x = static_cast<float>(x / total);
+    return v;
+  };
+  int informative = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const int bins = 1 + trial % 64;
+    std::vector<float> h(bins), k(bins);
+    const int kind = trial % 3;  // unrelated, near-identical, sparse
+    for (int b = 0; b < bins; ++b) {
+      h[b] = kind == 2 && rng.uniform(0, 3) != 0 ? 0.0f : static_cast<float>(rng.uniform(0.0, 1.0));
+      k[b] = kind == 1 ? h[b] * static_cast<float>(rng.uniform(0.95, 1.05))
+                       : (kind == 2 && rng.uniform(0, 3) != 0 ? 0.0f : static_cast<float>(rng.uniform(0.0, 1.0)));
+    }
+    h[0] += 1e-3f;  // never all zero
+    k[bins - 1] += 1e-3f;
+    h = normalised(h);
+    k = normalised(k);
+    const double bound = JeffreyDivergenceLowerBound(h, k);
+    const double computed = JeffreyDivergenceFromSelfTerms(h, JeffreySelfTerm(h), k, JeffreySelfTerm(k));
+    ASSERT_LE(bound, computed) << "trial " << trial;
+    ASSERT_LE(bound, JeffreyDivergence(h, k)) << "trial " << trial;
+    informative += bound > 0.0;
+  }
+  EXPECT_GT(informative, 1000) << "the bound must be useful, not just 0";
+  // Disjoint histograms: d_J = 2 ln 2, the bound sum (h - k)^2 / (2 (h + k)) = 1 (less the margin).
+  const std::vector<float> a = {1, 0}, b = {0, 1};
+  EXPECT_NEAR(JeffreyDivergenceLowerBound(a, b), 0.999 - 1e-5, 1e-7);
+  // Bins empty in both count nothing; equal histograms give no bound.
+  const std::vector<float> c = {0.5f, 0, 0.5f}, d = {0.25f, 0, 0.75f};
+  EXPECT_LE(JeffreyDivergenceLowerBound(c, d), JeffreyDivergence(c, d));
+  EXPECT_GT(JeffreyDivergenceLowerBound(c, d), 0.9 * JeffreyDivergence(c, d)) << "tight for similar histograms";
+  EXPECT_EQ(JeffreyDivergenceLowerBound(c, c), 0.0);
+}
+
+// Matching skips histograms whose bound rules them out; what it reports must be what every
+// divergence computed (Differences(), exhaustive) gives: the smallest divergence for a new view;
+// for a familiar one, a template among the histogram_max_candidates lowest (divergence, id)
+// within the threshold (the lowest itself when only one is refined), with its own divergence.
+TEST(HistogramModeTest, SkippingHistogramsKeepsTheSmallestDivergenceAndTheCandidates) {
+  for (const int max_candidates : {1, 3, 8}) {
+    TemplateConfig c = Panorama();
+    c.histogram_divergence_threshold = 0.02;
+    c.histogram_normalise_intensity = false;  // unseen places differ in brightness too
+    c.histogram_max_candidates = max_candidates;
+    TemplateLibrary library(c);
+    // Each place learnt four times with a little noise: several close candidates per view.
+    cv::RNG rng(31);
+    auto noisy = [&](const cv::Mat& image) {
+      cv::Mat noise(image.size(), CV_8UC1);
+      rng.fill(noise, cv::RNG::UNIFORM, 0, 12);
+      return cv::Mat(image + noise);
+    };
+    std::vector<cv::Mat> worlds;
+    for (int i = 0; i < 30; ++i) {
+      worlds.push_back(Texture(360, 56, 300 + i, 4 + i % 9));
+      for (int copy = 0; copy < 4; ++copy) library.Learn(WithDeadZone(noisy(worlds.back())));
+    }
+    int matched = 0, learnt = 0;
+    for (int q = 0; q < 40; ++q) {
+      cv::Mat query = q % 2 == 0 ? noisy(RollColumns(worlds[(q * 7) % worlds.size()], 10 * q))
+                                 : cv::Mat(Texture(360, 56, 5000 + q, 4 + q % 9) / 2 + 2 * q);
+      query = WithDeadZone(query);
+      const std::vector<double> all = library.Differences(query);  // before a new view is learnt
+      std::vector<std::pair<double, uint32_t>> within;
+      for (uint32_t id = 0; id < all.size(); ++id) {
+        if (all[id] <= c.histogram_divergence_threshold) within.emplace_back(all[id], id);
+      }
+      std::sort(within.begin(), within.end());
+      within.resize(std::min<std::size_t>(within.size(), max_candidates));
+      const ViewMatch m = library.MatchOrLearn(query);
+      if (m.is_new) {
+        ++learnt;
+        EXPECT_EQ(m.difference, *std::min_element(all.begin(), all.end())) << "query " << q;
+      } else {
+        ++matched;
+        ASSERT_LT(m.template_id, all.size());
+        EXPECT_EQ(m.difference, all[m.template_id]) << "query " << q;
+        EXPECT_TRUE(std::find(within.begin(), within.end(), std::make_pair(m.difference, m.template_id)) !=
+                    within.end())
+            << "query " << q << ": template " << m.template_id << " is not among the lowest " << max_candidates;
+        if (max_candidates == 1) EXPECT_EQ(m.template_id, within.front().second);
+      }
+    }
+    EXPECT_GT(matched, 0);
+    EXPECT_GT(learnt, 0);
+  }
 }
 
 }  // namespace
