@@ -171,6 +171,15 @@ void ClampedDifference(const float* __restrict e, float* __restrict inh, float* 
   }
 }
 
+// row[x] = 0 for x in [b, end). Runs are a few cells long and there are hundreds per step: an
+// inline vector loop, not the library memset call GCC would otherwise turn the loop into.
+#if defined(__GNUC__) && !defined(__clang__)
+__attribute__((optimize("no-tree-loop-distribute-patterns")))
+#endif
+inline void ZeroCells(float* __restrict row, int b, int end) {
+  for (int x = b; x < end; ++x) row[x] = 0.0f;
+}
+
 double MinDelta(double a, double b, double n) {
   const double d = std::abs(a - b);
   return std::min(d, n - d);
@@ -189,7 +198,7 @@ PoseCellNetwork::PoseCellNetwork(const PoseCellConfig& config)
   buf_a_.assign(cells, 0.0f);
   buf_b_.assign(cells, 0.0f);
   buf_c_.assign(cells, 0.0f);
-  for (RowFlags* r : {&rows_act_, &rows_a_, &rows_b_, &rows_c_}) {
+  for (RowFlags* r : {&rows_act_, &rows_a_, &rows_b_, &rows_c_, &rows_candidate_}) {
     r->assign(static_cast<size_t>(dim_xy_) * dim_th_, RowExtent{});
   }
   for (AxisSet* s : {&xs_, &ys_, &ex_xs_, &ex_ys_, &tmp_xs_, &tmp_ys_}) {
@@ -230,21 +239,29 @@ void PoseCellNetwork::ZeroRegion(std::vector<float>& buf, const AxisSet& xs, con
   for (int t : ts.index) {
     for (int y : ys.index) {
       float* row = &buf[Flat(0, y, t)];
-      for (auto [b, e] : xs.runs) std::fill(row + b, row + e, 0.0f);
+      for (auto [b, e] : xs.runs) ZeroCells(row, b, e);
     }
   }
 }
 
-void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, const AxisSet& ts) {
+void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, const AxisSet& ts,
+                                       const RowFlags* candidates) {
   // xs/ys/ts may alias scratch sets, never xs_/ys_/ts_ themselves.
   std::fill(xs_.member.begin(), xs_.member.end(), 0);
   std::fill(ys_.member.begin(), ys_.member.end(), 0);
   std::fill(ts_.member.begin(), ts_.member.end(), 0);
   for (int t : ts.index) {
     for (int y : ys.index) {
+      const RowExtent scan = candidates ? (*candidates)[Row(y, t)] : RowExtent{0, dim_xy_};
+      if (scan.empty()) {
+        rows_act_[Row(y, t)] = RowExtent{};
+        continue;
+      }
       const float* row = &activity_[Flat(0, y, t)];
       uint8_t any = 0;
-      for (auto [b, e] : xs.runs) any |= MarkNonZero(row, xs_.member.data(), b, e);
+      for (auto [b, e] : xs.runs) {
+        any |= MarkNonZero(row, xs_.member.data(), std::max(b, scan.lo), std::min(e, scan.hi));
+      }
       if (!any) {
         rows_act_[Row(y, t)] = RowExtent{};
         continue;
@@ -252,7 +269,7 @@ void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, con
       // The row's first and last non-zero cells (runs ascend): found from each end.
       int lo = dim_xy_, hi = 0;
       for (auto it = xs.runs.begin(); it != xs.runs.end() && lo == dim_xy_; ++it) {
-        for (int x = it->first; x < it->second; ++x) {
+        for (int x = std::max(it->first, scan.lo); x < std::min(it->second, scan.hi); ++x) {
           if (row[x] != 0.0f) {
             lo = x;
             break;
@@ -260,7 +277,7 @@ void PoseCellNetwork::RecomputeSupport(const AxisSet& xs, const AxisSet& ys, con
         }
       }
       for (auto it = xs.runs.rbegin(); it != xs.runs.rend() && hi == 0; ++it) {
-        for (int x = it->second - 1; x >= it->first; --x) {
+        for (int x = std::min(it->second, scan.hi) - 1; x >= std::max(it->first, scan.lo); --x) {
           if (row[x] != 0.0f) {
             hi = x + 1;
             break;
@@ -437,7 +454,7 @@ void PoseCellNetwork::ExciteInhibitNormalise() {
       const float* e = &buf_c_[row];
       float* inh = &buf_a_[row];
       if (rows_c_[Row(y, t)].empty()) {  // no excitation here: activity stays 0, clear the scratch
-        for (auto [b, end] : tmp_xs_.runs) std::fill(inh + b, inh + end, 0.0f);
+        for (auto [b, end] : tmp_xs_.runs) ZeroCells(inh, b, end);
         continue;
       }
       for (auto [b, end] : tmp_xs_.runs) ClampedDifference(e, inh, a, global, b, end);
@@ -456,14 +473,16 @@ void PoseCellNetwork::ExciteInhibitNormalise() {
     // Cannot happen with valid parameters (the excitation peak always beats the inhibition);
     // recover deterministically rather than divide by zero.
     ZeroRegion(activity_, ex_xs_, ex_ys_, ex_ts_);
-    RecomputeSupport(ex_xs_, ex_ys_, ex_ts_);
+    RecomputeSupport(ex_xs_, ex_ys_, ex_ts_, nullptr);
     InjectEnergy(static_cast<int>(best_.x), static_cast<int>(best_.y), static_cast<int>(best_.th), 1.0);
     return;
   }
-  RecomputeSupport(ex_xs_, ex_ys_, ex_ts_);
+  // Activity is non-zero only where the excitation is (rows_c_ covers it).
+  RecomputeSupport(ex_xs_, ex_ys_, ex_ts_, &rows_c_);
   const float scale = static_cast<float>(1.0 / total);
   for (int t : ts_.index) {
     for (int y : ys_.index) {
+      if (rows_act_[Row(y, t)].empty()) continue;  // all zero: scaling changes nothing
       float* a = &activity_[Flat(0, y, t)];
       for (auto [b, e] : xs_.runs)
         for (int x = b; x < e; ++x) a[x] *= scale;
@@ -482,6 +501,9 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
     // (OpenRatSLAM's weight_ne/nw/se/sw are this split for shifts under one cell).
     std::fill(tmp_xs_.member.begin(), tmp_xs_.member.end(), 0);
     std::fill(tmp_ys_.member.begin(), tmp_ys_.member.end(), 0);
+    for (int t : ts_.index) {  // rows stay in their layer
+      std::fill(rows_candidate_.begin() + Row(0, t), rows_candidate_.begin() + Row(0, t) + dim_xy_, RowExtent{});
+    }
     for (int t : ts_.index) {
       const double dir = t * cell_th;
       const double sx = shift_cells * std::cos(dir);
@@ -494,13 +516,21 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
       const float fy = static_cast<float>(sy - fy_floor);
       const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
       for (int y : ys_.index) {
-        if (rows_act_[Row(y, t)].empty()) continue;
+        const RowExtent source = rows_act_[Row(y, t)];
+        if (source.empty()) continue;
         const float* src = &activity_[Flat(0, y, t)];
         const int y0 = Wrap(y + iy, dim_xy_);
         const int y1 = y0 + 1 == dim_xy_ ? 0 : y0 + 1;
         float* d0 = &buf_a_[Flat(0, y0, t)];
         float* d1 = &buf_a_[Flat(0, y1, t)];
         tmp_ys_.member[y0] = tmp_ys_.member[y1] = 1;
+        // The non-zero cells of [lo, hi) land in [lo + ix, hi + ix + 1), wrapped (whole row
+        // when that range wraps).
+        const int start = Wrap(source.lo + ix, dim_xy_);
+        const int stop = start + (source.hi - source.lo) + 1;
+        const RowExtent moved = stop <= dim_xy_ ? RowExtent{start, stop} : RowExtent{0, dim_xy_};
+        rows_candidate_[Row(y0, t)].Add(moved.lo, moved.hi);
+        rows_candidate_[Row(y1, t)].Add(moved.lo, moved.hi);
         for (int x : xs_.index) {
           const float v = src[x];
           if (v == 0.0f) continue;
@@ -520,7 +550,7 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
     tmp_ys_.Finish();
     tmp_ts_.member = ts_.member;
     tmp_ts_.Finish();
-    RecomputeSupport(tmp_xs_, tmp_ys_, tmp_ts_);
+    RecomputeSupport(tmp_xs_, tmp_ys_, tmp_ts_, &rows_candidate_);
   }
 
   const double shift_th = vrot_radps * dt_s / cell_th;
@@ -529,13 +559,22 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
     const int it = Wrap(static_cast<int>(std::fmod(floor_th, dim_th_)), dim_th_);
     const float f = static_cast<float>(shift_th - floor_th);
     std::fill(tmp_ts_.member.begin(), tmp_ts_.member.end(), 0);
+    for (int t : ts_.index) {  // the layers rows move into, cleared before any is filled
+      for (int layer : {Wrap(t + it, dim_th_), Wrap(t + it + 1, dim_th_)}) {
+        std::fill(rows_candidate_.begin() + Row(0, layer), rows_candidate_.begin() + Row(0, layer) + dim_xy_,
+                  RowExtent{});
+      }
+    }
     for (int t : ts_.index) {
       const int t0 = Wrap(t + it, dim_th_);
       const int t1 = t0 + 1 == dim_th_ ? 0 : t0 + 1;
       tmp_ts_.member[t0] = 1;
       if (f > 0.0f) tmp_ts_.member[t1] = 1;
       for (int y : ys_.index) {
-        if (rows_act_[Row(y, t)].empty()) continue;
+        const RowExtent source = rows_act_[Row(y, t)];
+        if (source.empty()) continue;
+        rows_candidate_[Row(y, t0)].Add(source.lo, source.hi);  // rows keep their cells' x
+        rows_candidate_[Row(y, t1)].Add(source.lo, source.hi);
         const float* src = &activity_[Flat(0, y, t)];
         float* d0 = &buf_a_[Flat(0, y, t0)];
         float* d1 = &buf_a_[Flat(0, y, t1)];
@@ -556,7 +595,7 @@ void PoseCellNetwork::PathIntegrate(double vtrans_mps, double vrot_radps, double
     tmp_xs_.Finish();
     tmp_ys_.member = ys_.member;
     tmp_ys_.Finish();
-    RecomputeSupport(tmp_xs_, tmp_ys_, tmp_ts_);
+    RecomputeSupport(tmp_xs_, tmp_ys_, tmp_ts_, &rows_candidate_);
   }
 }
 
@@ -565,6 +604,8 @@ PoseCellPosition PoseCellNetwork::UpdateBestPose() {
   int bx = 0, by = 0, bt = 0;
   for (int t : ts_.index) {
     for (int y : ys_.index) {
+      // A row without activity cannot hold the peak (when no row has any, the pose is kept).
+      if (rows_act_[Row(y, t)].empty()) continue;
       const float* row = &activity_[Flat(0, y, t)];
       for (int x : xs_.index) {
         if (row[x] > best_v) {

@@ -182,16 +182,29 @@ class PoseCellNetwork {
   }
   void Dilate(const AxisSet& in, int n, int lo, int hi, AxisSet& out) const;
   void ZeroRegion(std::vector<float>& buf, const AxisSet& xs, const AxisSet& ys, const AxisSet& ts);
-  // Recomputes the active sets of activity_ from scratch within the given region.
-  void RecomputeSupport(const AxisSet& xs, const AxisSet& ys, const AxisSet& ts);
+  struct RowExtent;
+  using RowFlags = std::vector<RowExtent>;
+  // Recomputes the active sets of activity_ from scratch within the given region. candidates:
+  // per row an interval outside which the row is known to be zero (an empty one: all zero), so
+  // only it is scanned; nullptr scans the region's whole rows.
+  void RecomputeSupport(const AxisSet& xs, const AxisSet& ys, const AxisSet& ts, const RowFlags* candidates);
   // Per (theta, y) row: an interval [lo, hi) of x that covers every non-zero cell of the row
   // (empty when lo >= hi). The passes skip empty rows and the parts of the box outside a row's
   // interval, which matter when a view injection starts a second packet far from the first.
   struct RowExtent {
     int lo = 0, hi = 0;
     bool empty() const { return lo >= hi; }
+    // The hull of this and [b, e).
+    void Add(int b, int e) {
+      if (empty()) {
+        lo = b;
+        hi = e;
+      } else {
+        lo = lo < b ? lo : b;
+        hi = hi > e ? hi : e;
+      }
+    }
   };
-  using RowFlags = std::vector<RowExtent>;
   // Kernel widths are at most the network's size (config); taps are gathered on the stack.
   static constexpr int kMaxTaps = 1001;
   void ConvolveX(const std::vector<float>& in, const RowFlags& in_rows, std::vector<float>& out,
@@ -220,6 +233,7 @@ class PoseCellNetwork {
   std::vector<float> activity_;  // zero outside (xs_, ys_, ts_)
   std::vector<float> buf_a_, buf_b_, buf_c_;  // scratch, always all zero between calls
   RowFlags rows_act_, rows_a_, rows_b_, rows_c_;  // valid inside each buffer's current region
+  RowFlags rows_candidate_;  // path integration: where each moved row can be non-zero
   AxisSet xs_, ys_, ts_;                      // active region of activity_
   AxisSet ex_xs_, ex_ys_, ex_ts_, tmp_xs_, tmp_ys_, tmp_ts_;  // scratch sets
 
