@@ -33,7 +33,15 @@ std::vector<float> GaussianWeights(int dim, double var) {
   return out;
 }
 
+// i mod n in [0, n). Indices are almost always within one lap of the range: those are wrapped
+// without a division (the passes wrap every tap of every row).
 inline int Wrap(int i, int n) {
+  if (i >= 0) {
+    if (i < n) return i;
+    if (i < 2 * n) return i - n;
+  } else if (i >= -n) {
+    return i + n;
+  }
   i %= n;
   return i < 0 ? i + n : i;
 }
