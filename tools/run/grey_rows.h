@@ -10,8 +10,9 @@
 //
 // BGR frames are converted by an AVX2 kernel with OpenCV's own fixed-point weights when the CPU
 // has AVX2 and the kernel gives exactly cv::cvtColor(COLOR_BGR2GRAY)'s result for every one of
-// the 2^24 colours (checked once per process, ~10 ms, on first use; another OpenCV version with
-// other weights falls back to cv::cvtColor). BGRA frames use cv::cvtColor on the rows.
+// the 2^24 colours (checked once per process on first use, a few tens of ms; another OpenCV
+// version with other weights falls back to cv::cvtColor). BGRA frames use cv::cvtColor on the
+// rows.
 
 #include <opencv2/core.hpp>
 
