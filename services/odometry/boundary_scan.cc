@@ -25,13 +25,13 @@ BoundaryScan BoundaryScan::FromPoints(std::vector<Eigen::Vector2d> points, doubl
 }
 
 Alignment AlignToScan(const BoundaryScan& reference, std::span<const Eigen::Vector2d> points,
-                      const Eigen::Vector3d& guess, const AlignmentOptions& options) {
+                      const Eigen::Vector3d& guess, const Eigen::Vector3d& prior, const AlignmentOptions& options) {
   Alignment r;
   r.pose = guess;
   if (static_cast<int>(points.size()) < options.min_pairs) return r;
   Eigen::Vector3d& pose = r.pose;
-  const Eigen::Vector2d lateral(-std::sin(guess.z()), std::cos(guess.z()));
-  const Eigen::Vector2d forward(std::cos(guess.z()), std::sin(guess.z()));
+  const Eigen::Vector2d lateral(-std::sin(prior.z()), std::cos(prior.z()));
+  const Eigen::Vector2d forward(std::cos(prior.z()), std::sin(prior.z()));
   const double max_pair2 = options.max_pair_distance_m * options.max_pair_distance_m;
   const std::vector<Eigen::Vector2d>& ref = reference.points;
   for (int iteration = 0; iteration < options.iterations; ++iteration) {
@@ -73,17 +73,13 @@ Alignment AlignToScan(const BoundaryScan& reference, std::span<const Eigen::Vect
     }
     if (options.lateral_prior > 0) {
       const Eigen::Vector3d j_lateral(lateral.x(), lateral.y(), 0.0);
-      const double lateral_offset = lateral.dot(pose.head<2>() - guess.head<2>());
+      const double lateral_offset = lateral.dot(pose.head<2>() - prior.head<2>());
       h += options.lateral_prior * weights * j_lateral * j_lateral.transpose();
       g += options.lateral_prior * weights * lateral_offset * j_lateral;
     }
     if (options.rotation_prior > 0) {
       h(2, 2) += options.rotation_prior * weights;
-      g(2) += options.rotation_prior * weights * (pose.z() - guess.z());
-    }
-    if (options.anchor_prior > 0) {
-      h.topLeftCorner<2, 2>() += options.anchor_prior * weights * Eigen::Matrix2d::Identity();
-      g.head<2>() += options.anchor_prior * weights * (pose.head<2>() - guess.head<2>());
+      g(2) += options.rotation_prior * weights * (pose.z() - prior.z());
     }
     const Eigen::Vector3d step = h.ldlt().solve(-g);
     if (!step.allFinite()) {

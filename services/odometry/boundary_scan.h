@@ -3,18 +3,14 @@
 // bearing order) and point-to-line ICP of another scan onto it, in the plane (x forward, y left,
 // theta counter-clockwise).
 //
-// Used twice: frame to key frame by the floor odometry (floor_odometry.h), and the robot's view to
-// the view stored with a recognised experience by the experience map service, which measures where
-// the robot stands relative to the place it recognised instead of assuming it stands on it.
+// The floor odometry (floor_odometry.h) registers each frame to a key frame with it.
 //
 // Each point of the aligned scan pairs with the nearest reference point within
 // max_pair_distance_m, the error is its distance to the line through that point and its bearing
 // neighbours, and Gauss-Newton solves for (x, y, theta), pairs weighted by 1 / (r_a r_b)^2 (a
 // camera row's floor footprint grows with r^2; relative to a point 1 m away). Priors, each
 // scaled by the sum of pair weights so they mean the same for few or many points, hold the
-// solution near the guess where the points say little: sideways (the guess's left axis), in turn,
-// and in every direction (a weak anchor for what the geometry leaves unconstrained, such as
-// sliding along one straight wall).
+// solution near a prior pose where the points say little: sideways (its left axis) and in turn.
 //
 // Pure and deterministic.
 
@@ -39,10 +35,9 @@ struct AlignmentOptions {
   double max_pair_distance_m = 0.10;
   int iterations = 12;
   int min_pairs = 12;
-  double lateral_prior = 0.0;   // per unit pair weight, on the offset along the guess's left axis
-  double rotation_prior = 0.0;  // per unit pair weight, on the turn away from the guess
-  double anchor_prior = 0.0;    // per unit pair weight, on the x and y offset from the guess
-  // The alignment fails when the points constrain the guess's forward axis less than this per
+  double lateral_prior = 0.0;   // per unit pair weight, on the offset along the prior's left axis
+  double rotation_prior = 0.0;  // per unit pair weight, on the turn away from the prior's
+  // The alignment fails when the points constrain the prior's forward axis less than this per
   // unit pair weight (a corridor's parallel walls say nothing about motion along them); 0 = no check.
   double min_forward_constraint = 0.0;
 };
@@ -55,9 +50,11 @@ struct Alignment {
 };
 
 // Aligns points (in their own frame) onto reference, starting from guess (their frame's pose in
-// the reference frame). Not ok when fewer than min_pairs pairs are found, the forward constraint
-// is too weak, or the solve fails; pose then holds the last estimate.
+// the reference frame), with the priors held at prior (which may differ from the starting guess:
+// a constant-velocity seed starts the search, the measured turn holds it). Not ok when fewer than
+// min_pairs pairs are found, the forward constraint is too weak, or the solve fails; pose then
+// holds the last estimate.
 Alignment AlignToScan(const BoundaryScan& reference, std::span<const Eigen::Vector2d> points,
-                      const Eigen::Vector3d& guess, const AlignmentOptions& options);
+                      const Eigen::Vector3d& guess, const Eigen::Vector3d& prior, const AlignmentOptions& options);
 
 }  // namespace rslam::odometry

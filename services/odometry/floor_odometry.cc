@@ -24,13 +24,6 @@ PlanarMotion Between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return m;
 }
 
-// The robot cannot move sideways, so the registration keeps the lateral offset of the prediction
-// unless the points insist (weight: as if every pair had a lateral normal ten times over). The
-// turn stays near the seed's (the column-shift rotation is unbiased, only quantised to a pixel;
-// the boundary points, quantised to image rows, pull turns short): on a recorded demo path with
-// the true turn as prior, the summed turn came out 0.3% short at 3 (1.7% at 0.1, 0.7% at 1).
-constexpr double kLateralPriorPerPair = 10.0;
-constexpr double kRotationPriorPerPair = 3.0;
 // Key points farther apart than this are not neighbours on one boundary line.
 constexpr double kNeighbourMaxDistanceM = 0.12;
 
@@ -53,15 +46,16 @@ void FloorOdometry::MakeKeyFrame(std::vector<Eigen::Vector2d>&& points) {
   has_key_ = true;
 }
 
-Alignment FloorOdometry::Register(std::span<const Eigen::Vector2d> points, const Eigen::Vector3d& predicted) const {
+Alignment FloorOdometry::Register(std::span<const Eigen::Vector2d> points, const Eigen::Vector3d& predicted,
+                                  const Eigen::Vector3d& prior) const {
   AlignmentOptions options;
   options.max_pair_distance_m = config_.max_pair_distance_m;
   options.iterations = config_.iterations;
   options.min_pairs = config_.min_points;
-  options.lateral_prior = kLateralPriorPerPair;
-  options.rotation_prior = kRotationPriorPerPair;
+  options.lateral_prior = config_.lateral_prior;
+  options.rotation_prior = config_.rotation_prior;
   options.min_forward_constraint = config_.min_constraint;
-  return AlignToScan(key_, points, predicted, options);
+  return AlignToScan(key_, points, predicted, prior, options);
 }
 
 PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, const PlanarMotion& given_prior) {
@@ -99,8 +93,9 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
     seeds.push_back(driving_on);
   }
   Alignment best;
+  const Eigen::Vector3d held = Compose(previous, prior.dx, prior.dy, prior.dtheta);
   for (const PlanarMotion& seed : seeds) {
-    const Alignment r = Register(points, Compose(previous, seed.dx, seed.dy, seed.dtheta));
+    const Alignment r = Register(points, Compose(previous, seed.dx, seed.dy, seed.dtheta), held);
     if (!r.ok) continue;
     // The closer fit wins, unless it pairs up clearly fewer points (a wrong seed can still
     // settle where a few points happen to fit).

@@ -50,6 +50,8 @@ struct FloorOdometryConfig {
   int iterations = 12;
   double min_constraint = 0.02;         // smallest normal-matrix eigenvalue per pair (see above)
   int coast_frames = 50;                // constant velocity for at most this many frames
+  double lateral_prior = 10.0;          // see floor_odometry.cc
+  double rotation_prior = 3.0;
 
   template <class V>
   void VisitFields(V& v) {
@@ -63,6 +65,8 @@ struct FloorOdometryConfig {
       "smallest eigenvalue of the ICP normal matrix per pair; below it the frame is not registered");
     v("coast_frames", coast_frames,
       "while the prior says the robot moves, reuse the last registered forward step for this many frames");
+    v("lateral_prior", lateral_prior, "weight (per point pair) holding the robot from moving sideways");
+    v("rotation_prior", rotation_prior, "weight (per point pair) holding the turn near the prior's");
   }
   void Validate() const {
     Require(max_range_m > 0 && max_range_m < 100, "max_range_m", "must be in (0, 100)");
@@ -73,6 +77,8 @@ struct FloorOdometryConfig {
     Require(iterations >= 1 && iterations <= 100, "iterations", "must be 1..100");
     Require(min_constraint >= 0, "min_constraint", "must be >= 0");
     Require(coast_frames >= 0, "coast_frames", "must be >= 0");
+    Require(lateral_prior >= 0, "lateral_prior", "must be >= 0");
+    Require(rotation_prior >= 0, "rotation_prior", "must be >= 0");
   }
 };
 
@@ -102,8 +108,9 @@ class FloorOdometry {
 
  private:
   void MakeKeyFrame(std::vector<Eigen::Vector2d>&& points);
-  // ICP from the predicted pose of the robot in the key frame.
-  Alignment Register(std::span<const Eigen::Vector2d> points, const Eigen::Vector3d& predicted) const;
+  // ICP from the predicted pose of the robot in the key frame, priors held at `prior`.
+  Alignment Register(std::span<const Eigen::Vector2d> points, const Eigen::Vector3d& predicted,
+                     const Eigen::Vector3d& prior) const;
 
   const FloorOdometryConfig config_;
   bool has_key_ = false;

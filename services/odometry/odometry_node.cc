@@ -123,8 +123,10 @@ class OdometryNode::Impl {
     context_.SetLastFrame(image.header.frame_seq, image.header.stamp_ns);
   }
 
-  // Replaces the column-profile velocity by the floor-boundary registration's, seeded with it
-  // (and left as it is when the frame cannot be registered). Throws std::invalid_argument for an
+  // Replaces the column-profile velocity by the floor-boundary registration's, seeded with it;
+  // a frame that cannot be registered keeps the profiles' turn and the floor odometry's
+  // constant-velocity step, a turn on the spot (with turns_from_profiles) the profiles' motion
+  // (the registration still sees it, to keep its key frame). Throws std::invalid_argument for an
   // image the boundary pipeline cannot read (not bgr8, or not the configured camera's size).
   void FloorMotion(const msg::Image& image, double dt_s, Velocity& velocity) {
     if (image.encoding != camera::kBgr8)
@@ -140,9 +142,12 @@ class OdometryNode::Impl {
     prior.dx = velocity.vtrans * dt_s;
     prior.dtheta = velocity.vrot * dt_s;
     const PlanarMotion motion = floor_->Update(boundary_points_, prior);
-    if (!motion.measured || dt_s <= 0) return;
+    const double turn_in_place = config_.visual.turn_in_place_vrot_radps;
+    if (config_.floor.turns_from_profiles && turn_in_place > 0 && std::abs(velocity.vrot) >= turn_in_place) return;
+    if (dt_s <= 0) return;
+    // Unregistered, the floor odometry returns the prior with its constant-velocity forward step.
     velocity.vtrans = motion.dx / dt_s;
-    velocity.vrot = motion.dtheta / dt_s;
+    if (motion.measured) velocity.vrot = motion.dtheta / dt_s;
   }
 
   ServiceContext& context_;
