@@ -2,6 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <cstddef>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -58,7 +59,8 @@ __attribute__((target("avx2"))) void BgrToGreyAvx2(const uint8_t* src, uint8_t* 
     _mm_storel_epi64(reinterpret_cast<__m128i*>(dst + i + 8), _mm256_extracti128_si256(bytes, 1));
   }
   for (; i < n; ++i) {
-    const int sum = src[3 * i] * kBlueWeight + src[3 * i + 1] * kGreenWeight + src[3 * i + 2] * kRedWeight;
+    const uint8_t* p = src + 3 * static_cast<std::size_t>(i);
+    const int sum = p[0] * kBlueWeight + p[1] * kGreenWeight + p[2] * kRedWeight;
     dst[i] = static_cast<uint8_t>((sum + (1 << (kShift - 1))) >> kShift);
   }
 }

@@ -121,6 +121,57 @@ TEST(WindowSadTest, ShiftedWindowScansAgreeWithTheDefinitionInEveryImplementatio
   }
 }
 
+// Panoramic matching tries every wrapped shift: many windows, the best one late.
+TEST(WindowSadTest, ScansOfManyWindowsAgreeWithTheDefinitionInEveryImplementation) {
+  std::mt19937 rng(5);
+  const auto implementations = AvailableWindowSadImplementations();
+  const int length = 60, rows = 10, windows = 150;
+  const int template_stride = 64;
+  const int view_stride = length + windows;
+  const std::vector<uint8_t> view = RandomBytes(static_cast<std::size_t>(view_stride) * rows + kWindowSadPadding, rng);
+  std::vector<uint8_t> tmpl(static_cast<std::size_t>(template_stride) * rows + kWindowSadPadding, 0);
+  uint32_t template_sum = 0;
+  for (int y = 0; y < rows; ++y) {
+    for (int x = 0; x < length; ++x) {
+      // Close to the view at shift 100, far into the scan.
+      const int v = view[y * view_stride + x + 100] + static_cast<int>(rng() % 5) - 2;
+      tmpl[y * template_stride + x] = static_cast<uint8_t>(std::clamp(v, 0, 255));
+      template_sum += tmpl[y * template_stride + x];
+    }
+  }
+  std::vector<int> offsets;
+  std::vector<uint32_t> sums;
+  for (int s = 0; s < windows; ++s) {
+    offsets.push_back(s);
+    uint32_t sum = 0;
+    for (int y = 0; y < rows; ++y) {
+      for (int x = 0; x < length; ++x) sum += view[y * view_stride + x + s];
+    }
+    sums.push_back(sum);
+  }
+  ShiftedWindows set;
+  set.view = view.data();
+  set.view_stride = view_stride;
+  set.view_offsets = offsets.data();
+  set.view_sums = sums.data();
+  set.count = windows;
+  set.length = length;
+  set.rows = rows;
+  set.template_stride = template_stride;
+  const ShiftedWindowsResult all = ReferenceScan(set, tmpl.data(), template_sum, UINT64_MAX);
+  ASSERT_EQ(all.best_window, 100);
+  ASSERT_GT(all.best_sad, 0u);
+  for (uint64_t limit : {uint64_t{0}, all.best_sad - 1, all.best_sad, uint64_t{2000}, uint64_t{40000}, UINT64_MAX}) {
+    const ShiftedWindowsResult expected = ReferenceScan(set, tmpl.data(), template_sum, limit);
+    for (const auto& impl : implementations) {
+      const ShiftedWindowsResult got = impl.shifted_windows_sad(set, tmpl.data(), template_sum, limit);
+      EXPECT_EQ(got.best_window, expected.best_window) << impl.name << " limit " << limit;
+      EXPECT_EQ(got.best_sad, expected.best_sad) << impl.name << " limit " << limit;
+      EXPECT_EQ(got.smallest_seen, expected.smallest_seen) << impl.name << " limit " << limit;
+    }
+  }
+}
+
 TEST(WindowSadTest, EqualSadsGoToTheEarlierWindow) {
   // Two identical windows: the first one wins in every implementation.
   std::vector<uint8_t> view(64 + kWindowSadPadding, 0);
