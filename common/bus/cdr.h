@@ -106,7 +106,12 @@ class CdrReader {
   void Read(T& v) {
     Align(sizeof(T));
     Need(sizeof(T));
-    CopyOut(&v, sizeof(T));
+    if (pos_ + sizeof(T) <= seg_end_) {  // the usual case: within the current piece
+      std::memcpy(&v, At(), sizeof(T));
+      pos_ += sizeof(T);
+    } else {
+      CopyOut(&v, sizeof(T));
+    }
     if (swap_) v = ByteSwap(v);
   }
   void Read(bool& v) {

@@ -25,7 +25,7 @@ class Publisher {
   // Thread-safe. Throws BusError if a reliable reader stays blocked beyond the preset's limit.
   void Publish(const T& msg) {
     std::lock_guard lock(mutex_);
-    // Serialized straight into a buffer the vendor keeps (no copy of an image on the way).
+    // Serialized straight into a buffer the vendor may keep (Cyclone: no copy on the way).
     std::vector<uint8_t> buffer = writer_->AcquireBuffer();
     buffer.clear();
     AppendCdr(msg, buffer);
