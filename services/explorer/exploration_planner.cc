@@ -59,6 +59,7 @@ ExplorationPlanner::ExplorationPlanner(ExplorerConfig config) : config_(std::mov
 void ExplorationPlanner::RecordPirouette(const Pose2D& where) {
   if (!IsFinite(where)) throw std::invalid_argument("pirouette pose is not finite");
   last_pirouette_ = where;
+  blocking_obstacles_.clear();  // the grid has just been looked at all round
 }
 
 bool ExplorationPlanner::IsSetAside(int x, int y) const {
@@ -70,7 +71,12 @@ void ExplorationPlanner::SetAside(int x, int y, std::string reason) {
   if (!IsSetAside(x, y)) set_aside_.push_back({x, y, std::move(reason)});
 }
 
-void ExplorationPlanner::ReportBlocked(const Plan& plan) {
+void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair<double, double>> obstacle) {
+  if (obstacle) {
+    if (!std::isfinite(obstacle->first) || !std::isfinite(obstacle->second))
+      throw std::invalid_argument("blocking obstacle is not finite");
+    blocking_obstacles_.push_back(*obstacle);
+  }
   if (plan.goal_x < 0) return;
   if (++blocked_attempts_[{plan.goal_x, plan.goal_y}] >= config_.max_blocked_attempts)
     SetAside(plan.goal_x, plan.goal_y,
@@ -97,6 +103,14 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     const size_t i = static_cast<size_t>(g.y) * w + g.x;
     traversable[i] = 0;
     goal[i] = 0;
+  }
+  for (const auto& [ox, oy] : blocking_obstacles_) {
+    const int reach = static_cast<int>(std::ceil(config_.robot_radius_m / cs.cell_size_m));
+    const int ocx = cs.CellX(ox), ocy = cs.CellY(oy);
+    for (int y = ocy - reach; y <= ocy + reach; ++y)
+      for (int x = ocx - reach; x <= ocx + reach; ++x)
+        if (cs.Contains(x, y) && std::hypot(cs.CentreX(x) - ox, cs.CentreY(y) - oy) <= config_.robot_radius_m)
+          traversable[static_cast<size_t>(y) * w + x] = 0;
   }
   if (!goal[robot_index]) traversable[robot_index] = 1;  // the robot is there, whatever the map says
 

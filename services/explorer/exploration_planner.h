@@ -72,7 +72,11 @@ class ExplorationPlanner {
   // The robot has finished a pirouette at this pose.
   void RecordPirouette(const Pose2D& where);
   // A move of this plan was blocked when looked at; after max_blocked_attempts its goal is set aside.
-  void ReportBlocked(const Plan& plan);
+  // obstacle (world x, y; from ObstacleOnPath): until the next pirouette, plans keep their centre
+  // line farther than the robot radius from it. Without that the coarse plan (its cells are
+  // classed by the grid cells inside them) can send every goal through the same gap the exact
+  // check refuses, and each goal is set aside in turn until exploration calls itself complete.
+  void ReportBlocked(const Plan& plan, std::optional<std::pair<double, double>> obstacle = std::nullopt);
 
   const std::vector<SetAsideGoal>& set_aside_goals() const { return set_aside_; }
 
@@ -89,6 +93,7 @@ class ExplorationPlanner {
   std::optional<Pose2D> last_pirouette_;
   std::map<std::pair<int, int>, int> blocked_attempts_;
   std::vector<SetAsideGoal> set_aside_;
+  std::vector<std::pair<double, double>> blocking_obstacles_;  // since the last pirouette
 };
 
 }  // namespace rslam::explorer

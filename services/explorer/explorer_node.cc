@@ -267,7 +267,7 @@ class ExplorerNode::Controller {
       spdlog::info("blocked: move {:.2f} m from ({:.2f}, {:.2f}, {:.2f}) passes the obstacle at ({:.3f}, {:.3f})",
                    command.distance_m, expected_pose_.x, expected_pose_.y, expected_pose_.theta, obstacle->first,
                    obstacle->second);
-      planner_.ReportBlocked(*plan_);
+      planner_.ReportBlocked(*plan_, obstacle);
       plan_.reset();
       reason_ = "look before you move: the path ahead is blocked, planning again";
       NoteSetAside();

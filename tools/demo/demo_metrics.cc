@@ -97,6 +97,33 @@ std::map<uint32_t, sim::Pose2D> ExperienceGroundTruth(const DemoObservations& se
   return out;
 }
 
+std::optional<sim::Pose2D> FitMapToWorld(std::span<const msg::Experience> experiences,
+                                         const std::map<uint32_t, sim::Pose2D>& experience_truth) {
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pairs;  // (map, world)
+  for (const auto& e : experiences) {
+    const auto it = experience_truth.find(e.id);
+    if (it != experience_truth.end()) pairs.push_back({{e.x_m, e.y_m}, {it->second.x, it->second.y}});
+  }
+  if (pairs.size() < 2) return std::nullopt;
+  Eigen::Vector2d map_mean = Eigen::Vector2d::Zero(), world_mean = Eigen::Vector2d::Zero();
+  for (const auto& [m, w] : pairs) {
+    map_mean += m;
+    world_mean += w;
+  }
+  map_mean /= static_cast<double>(pairs.size());
+  world_mean /= static_cast<double>(pairs.size());
+  double dot = 0.0, cross = 0.0;
+  for (const auto& [m, w] : pairs) {
+    const Eigen::Vector2d a = m - map_mean, b = w - world_mean;
+    dot += a.dot(b);
+    cross += a.x() * b.y() - a.y() * b.x();
+  }
+  const double theta = std::atan2(cross, dot);
+  const double c = std::cos(theta), s = std::sin(theta);
+  return sim::Pose2D{world_mean.x() - (c * map_mean.x() - s * map_mean.y()),
+                     world_mean.y() - (s * map_mean.x() + c * map_mean.y()), theta};
+}
+
 LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
                                    const std::map<uint32_t, sim::Pose2D>& experience_truth, double max_distance_m) {
   LoopClosureCheck out;

@@ -60,6 +60,14 @@ struct LoopClosureCheck {
 // Ground truth of each experience: the true pose at the frame it was first current.
 std::map<uint32_t, sim::Pose2D> ExperienceGroundTruth(const DemoObservations& seen);
 
+// The rigid transform (map frame to world, as MapToWorld takes it) that best overlays the
+// experiences on their ground truth (least squares, no scale: the grid is metric). A map's frame
+// is fixed by its first experience only; a map that is right in shape but turned as a whole (its
+// corrections do not hold the first experience still) is judged by its shape this way. None with
+// fewer than two experiences that have ground truth.
+std::optional<sim::Pose2D> FitMapToWorld(std::span<const msg::Experience> experiences,
+                                         const std::map<uint32_t, sim::Pose2D>& experience_truth);
+
 LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
                                    const std::map<uint32_t, sim::Pose2D>& experience_truth, double max_distance_m);
 

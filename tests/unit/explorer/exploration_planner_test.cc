@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace rslam::explorer {
@@ -201,6 +202,49 @@ TEST(ExplorationPlannerTest, RejectsBadInput) {
   ExplorerConfig config;
   config.coarse_cell_factor = 0;
   EXPECT_THROW(ExplorationPlanner{config}, ConfigError);
+}
+
+}  // namespace
+}  // namespace rslam::explorer
+
+namespace rslam::explorer {
+namespace {
+
+// Closest distance from (px, py) to the centre lines of a plan's straight moves from `from`.
+double ClosestApproach(const Plan& plan, Pose2D from, double px, double py) {
+  double closest = 1e9;
+  for (const MotionCommand& c : plan.commands) {
+    if (c.kind == Kind::kRotate) from.theta += c.angle_rad;
+    if (c.kind != Kind::kMove) continue;
+    const double ex = from.x + c.distance_m * std::cos(from.theta), ey = from.y + c.distance_m * std::sin(from.theta);
+    const double sx = ex - from.x, sy = ey - from.y, len2 = sx * sx + sy * sy;
+    const double t = len2 > 0 ? std::clamp(((px - from.x) * sx + (py - from.y) * sy) / len2, 0.0, 1.0) : 0.0;
+    closest = std::min(closest, std::hypot(px - (from.x + t * sx), py - (from.y + t * sy)));
+    from.x = ex;
+    from.y = ey;
+  }
+  return closest;
+}
+
+TEST(ExplorationPlannerTest, ABlockedMoveSendsTheNextPlanAroundTheObstacleUntilTheNextPirouette) {
+  // A known free room, unknown on the east side; the robot in the west facing east.
+  TestGrid grid(60, 40, 0);
+  for (int y = 1; y < 39; ++y)
+    for (int x = 50; x < 59; ++x) grid.Set(x, y, -1);
+  ExplorationPlanner planner(Config());
+  const Pose2D robot{0.5, 1.0, 0.0};
+  const Plan first = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(first.complete) << first.reason;
+  // Look before you move found an obstacle (the grid's coarse classes missed it) on that way.
+  const double ox = 1.55, oy = 1.05;
+  ASSERT_LT(ClosestApproach(first, robot, ox, oy), 0.05);
+  planner.ReportBlocked(first, std::pair{ox, oy});
+  const Plan around = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(around.complete) << around.reason;
+  EXPECT_GT(ClosestApproach(around, robot, ox, oy), Config().robot_radius_m);
+  // A pirouette looks all round: the obstacle is forgotten with it.
+  planner.RecordPirouette({2.5, 3.0, 0.0});
+  EXPECT_LT(ClosestApproach(planner.PlanFrom(grid.View(), robot), robot, ox, oy), 0.05);
 }
 
 }  // namespace
