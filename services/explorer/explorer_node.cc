@@ -192,15 +192,23 @@ class ExplorerNode::Controller {
         Step();
         return;
       }
-      case msg::MotionState::MOTION_BLOCKED:
+      case msg::MotionState::MOTION_BLOCKED: {
+        // A blocked straight move bumped into something the map does not show: just ahead.
+        std::optional<std::pair<double, double>> bump;
+        if (awaiting_->command.kind == MotionCommand::Kind::kMove && pose_) {
+          const Pose2D at = RobotPose();
+          const double ahead = std::copysign(config_.planner.robot_radius_m, awaiting_->command.distance_m);
+          bump = std::pair{at.x + ahead * std::cos(at.theta), at.y + ahead * std::sin(at.theta)};
+        }
         awaiting_.reset();
-        if (plan_) planner_.ReportBlocked(*plan_);
+        if (plan_) planner_.ReportBlocked(*plan_, bump);
         plan_.reset();
         reason_ = "the base reported command " + std::to_string(feedback.command_seq) + " blocked";
         NoteSetAside();
         WaitForFreshGrid();
         Step();
         return;
+      }
     }
     context_.Reject("feedback", "unknown motion state " + std::to_string(static_cast<int>(feedback.state)));
   }
