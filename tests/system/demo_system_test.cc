@@ -114,6 +114,11 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   // built from garbage poses lands far lower.
   EXPECT_GT(summary["map_precision"].get<double>(), 0.3);
   EXPECT_LE(summary["map_precision"].get<double>(), 1.0);
+  // The grid placed by the start pose alone, beside the fitted placement.
+  ASSERT_TRUE(summary["grid"]["at_start_pose"]["coverage"].is_number()) << summary.dump(2);
+  EXPECT_LE(summary["grid"]["at_start_pose"]["coverage"].get<double>(), 1.0);
+  EXPECT_LE(summary["grid"]["at_start_pose"]["map_precision"].get<double>(), 1.0);
+  EXPECT_TRUE(summary["grid_placement"]["theta_rad"].is_number());
   if (summary["loop_closure_precision"].is_number()) {
     EXPECT_GE(summary["loop_closure_precision"].get<double>(), 0.0);
     EXPECT_LE(summary["loop_closure_precision"].get<double>(), 1.0);
