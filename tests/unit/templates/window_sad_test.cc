@@ -68,6 +68,33 @@ ShiftedWindowsResult ReferenceScan(const ShiftedWindows& s, const uint8_t* tmpl,
   return r;
 }
 
+// Windows at shifts 0..count-1 of a view (row stride view_stride), with their pixel sums.
+struct ConsecutiveWindows {
+  std::vector<int> offsets;
+  std::vector<uint32_t> sums;
+  ShiftedWindows set;
+  ConsecutiveWindows(const std::vector<uint8_t>& view, int view_stride, int count, int length, int rows,
+                     int template_stride) {
+    for (int s = 0; s < count; ++s) {
+      offsets.push_back(s);
+      uint32_t sum = 0;
+      for (int y = 0; y < rows; ++y) {
+        for (int x = 0; x < length; ++x) sum += view[y * view_stride + x + s];
+      }
+      sums.push_back(sum);
+    }
+    set.view = view.data();
+    set.view_stride = view_stride;
+    set.view_offsets = offsets.data();
+    set.view_sums = sums.data();
+    set.count = count;
+    set.length = length;
+    set.rows = rows;
+    set.template_stride = template_stride;
+  }
+  ConsecutiveWindows(const ConsecutiveWindows&) = delete;
+};
+
 TEST(WindowSadTest, ShiftedWindowScansAgreeWithTheDefinitionInEveryImplementation) {
   std::mt19937 rng(11);
   const auto implementations = AvailableWindowSadImplementations();
@@ -88,25 +115,8 @@ TEST(WindowSadTest, ShiftedWindowScansAgreeWithTheDefinitionInEveryImplementatio
         template_sum += tmpl[y * template_stride + x];
       }
     }
-    std::vector<int> offsets;
-    std::vector<uint32_t> sums;
-    for (int s = 0; s <= 2 * shift; ++s) {
-      offsets.push_back(s);
-      uint32_t sum = 0;
-      for (int y = 0; y < rows; ++y) {
-        for (int x = 0; x < length; ++x) sum += view[y * view_stride + x + s];
-      }
-      sums.push_back(sum);
-    }
-    ShiftedWindows set;
-    set.view = view.data();
-    set.view_stride = view_stride;
-    set.view_offsets = offsets.data();
-    set.view_sums = sums.data();
-    set.count = static_cast<int>(offsets.size());
-    set.length = length;
-    set.rows = rows;
-    set.template_stride = template_stride;
+    const ConsecutiveWindows windows(view, view_stride, 2 * shift + 1, length, rows, template_stride);
+    const ShiftedWindows& set = windows.set;
     const ShiftedWindowsResult all = ReferenceScan(set, tmpl.data(), template_sum, UINT64_MAX);
     ASSERT_EQ(all.best_window, shift);
     for (uint64_t limit : {uint64_t{0}, all.best_sad, all.best_sad + 1, 50 * static_cast<uint64_t>(length), UINT64_MAX}) {
@@ -139,25 +149,8 @@ TEST(WindowSadTest, ScansOfManyWindowsAgreeWithTheDefinitionInEveryImplementatio
       template_sum += tmpl[y * template_stride + x];
     }
   }
-  std::vector<int> offsets;
-  std::vector<uint32_t> sums;
-  for (int s = 0; s < windows; ++s) {
-    offsets.push_back(s);
-    uint32_t sum = 0;
-    for (int y = 0; y < rows; ++y) {
-      for (int x = 0; x < length; ++x) sum += view[y * view_stride + x + s];
-    }
-    sums.push_back(sum);
-  }
-  ShiftedWindows set;
-  set.view = view.data();
-  set.view_stride = view_stride;
-  set.view_offsets = offsets.data();
-  set.view_sums = sums.data();
-  set.count = windows;
-  set.length = length;
-  set.rows = rows;
-  set.template_stride = template_stride;
+  const ConsecutiveWindows scan(view, view_stride, windows, length, rows, template_stride);
+  const ShiftedWindows& set = scan.set;
   const ShiftedWindowsResult all = ReferenceScan(set, tmpl.data(), template_sum, UINT64_MAX);
   ASSERT_EQ(all.best_window, 100);
   ASSERT_GT(all.best_sad, 0u);
