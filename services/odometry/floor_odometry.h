@@ -50,7 +50,12 @@ struct FloorOdometryConfig {
   int iterations = 12;
   double min_constraint = 0.02;         // smallest normal-matrix eigenvalue per pair (see above)
   int coast_frames = 50;                // constant velocity for at most this many frames
-  double lateral_prior = 10.0;          // see floor_odometry.cc
+  // The robot cannot move sideways: the lateral offset stays the prior's unless the points insist
+  // (as if every pair had a lateral normal ten times over). The turn stays near the column
+  // profiles' (unbiased, quantised to a pixel; boundary points, quantised to image rows, pull
+  // turns short): with the true turn as prior on a recorded demo path, the summed turn came out
+  // 0.3% short at 3 (1.7% at 0.1, 0.7% at 1).
+  double lateral_prior = 10.0;
   double rotation_prior = 3.0;
 
   template <class V>
