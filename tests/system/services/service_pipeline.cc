@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
+#include <type_traits>
 
 #include "common/bus/bus_config.h"
 #include "common/bus/topics.h"
@@ -55,6 +56,31 @@ ServicePipeline::ServicePipeline(int domain, PipelineOptions options) : domain_(
   await_running({"odometry", "templates"});
   if (!pose_subscriber_->WaitForPublishers(1, options_.startup_timeout))
     throw std::runtime_error("experience_map/pose never matched\n" + Logs());
+  AwaitDiscovery();
+}
+
+// "Running" says a service's readers and writers exist, not that discovery has matched them:
+// across vendors that can take a second, and a stream sample written before its reader matched
+// is never delivered (the first frames' odometry would be lost). A probe reader on each stage's
+// input, of the reading service's vendor, matching the writer's means that pair has had the time.
+void ServicePipeline::AwaitDiscovery() {
+  const auto vendor_of = [this](const std::string& service) {
+    const auto it = options_.vendors.find(service);
+    return it == options_.vendors.end() ? std::string("cyclone") : it->second;
+  };
+  const auto await_writer = [this](const std::string& vendor, const auto& topic) {
+    bus::BusConfig config;
+    config.domain_id = domain_;
+    config.dds = vendor;
+    const auto probe = bus::Participant::Create(config);
+    using Message = typename std::decay_t<decltype(topic)>::Type;
+    const bus::Subscriber<Message> reader(*probe, topic, [](const Message&) {});
+    if (!reader.WaitForPublishers(1, options_.startup_timeout))
+      throw std::runtime_error(std::string(topic.name) + " never matched a " + vendor + " reader\n" + Logs());
+  };
+  await_writer(vendor_of("pose-cells"), bus::topics::kOdometryVelocity);
+  await_writer(vendor_of("pose-cells"), bus::topics::kTemplatesView);
+  await_writer(vendor_of("experience-map"), bus::topics::kPoseCellsAction);
 }
 
 ServicePipeline::~ServicePipeline() {

@@ -68,6 +68,7 @@ class ServicePipeline {
  private:
   std::vector<std::string> ServiceArgs(const std::string& service) const;
   void Start(const std::string& service, const std::vector<std::string>& extra_args = {});
+  void AwaitDiscovery();
 
   const int domain_;
   const PipelineOptions options_;
