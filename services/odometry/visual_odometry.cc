@@ -253,8 +253,11 @@ double SubpixelOffset(std::span<const float> current, std::span<const float> pre
                       bool match_gain) {
   const int w = static_cast<int>(current.size());
   if (w - (std::abs(best.shift) + 1) < 1) return 0.0;
-  const double left = ShiftedProfileDifference(current, previous, best.shift - 1, match_gain);
-  const double right = ShiftedProfileDifference(current, previous, best.shift + 1, match_gain);
+  std::vector<double> prefix_current, prefix_previous;
+  PrefixSums(current, prefix_current);
+  PrefixSums(previous, prefix_previous);
+  const double left = DifferenceAt(current, previous, prefix_current, prefix_previous, best.shift - 1, match_gain);
+  const double right = DifferenceAt(current, previous, prefix_current, prefix_previous, best.shift + 1, match_gain);
   const double centre = best.difference;
   const double slope = std::max(left, right) - centre;
   if (!(slope > 1e-12)) return 0.0;

@@ -48,21 +48,17 @@ std::pair<int, int> RowsTheStagesRead(const RatSlamConfig& config, int rows) {
 
 }  // namespace
 
-cv::Mat ToGrey(const cv::Mat& image, cv::Mat& buffer) {
+cv::Mat ToGrey(const cv::Mat& image) {
   if (image.empty()) throw std::invalid_argument("empty image");
   if (image.depth() != CV_8U) throw std::invalid_argument("image is not 8 bits per channel");
+  cv::Mat grey;
   switch (image.channels()) {
     case 1: return image;
-    case 3: cv::cvtColor(image, buffer, cv::COLOR_BGR2GRAY); return buffer;
-    case 4: cv::cvtColor(image, buffer, cv::COLOR_BGRA2GRAY); return buffer;
+    case 3: cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY); return grey;
+    case 4: cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY); return grey;
     default:
       throw std::invalid_argument("image has " + std::to_string(image.channels()) + " channels (expected 1, 3 or 4)");
   }
-}
-
-cv::Mat ToGrey(const cv::Mat& image) {
-  cv::Mat buffer;
-  return ToGrey(image, buffer);
 }
 
 RatSlamRunner::RatSlamRunner(const RatSlamConfig& config)

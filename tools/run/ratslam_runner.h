@@ -68,10 +68,8 @@ struct RelaxResult {
 
 // The frame as CV_8UC1: BGR (3 channels) and BGRA (4) converted, grey returned as is (no copy).
 // Throws std::invalid_argument for an empty image, a depth other than 8 bits, or 2 channels.
+// (Frames in ProcessFrame go through ToGreyRows, grey_rows.h: the same pixels in the rows read.)
 cv::Mat ToGrey(const cv::Mat& image);
-// The same, converting into buffer (reused from frame to frame when the size stays: no
-// allocation per frame); a grey image is returned as is and buffer is left alone.
-cv::Mat ToGrey(const cv::Mat& image, cv::Mat& buffer);
 
 class RatSlamRunner {
  public:
