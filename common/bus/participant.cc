@@ -1,5 +1,6 @@
 #include "common/bus/participant.h"
 
+#include <algorithm>
 #include <cstdlib>
 
 namespace rslam::bus {
@@ -38,6 +39,32 @@ void BusConfig::ApplyEnvironment() {
 std::unique_ptr<Participant> Participant::Create(const BusConfig& config) {
   config.Validate();
   return config.vendor() == Vendor::kCyclone ? CreateCycloneParticipant(config) : CreateFastDdsParticipant(config);
+}
+
+void Participant::Track(const std::string& topic, const RawWriter* writer) {
+  std::lock_guard lock(tracked_mutex_);
+  tracked_.push_back({topic, writer, nullptr});
+}
+
+void Participant::Track(const std::string& topic, const RawReader* reader) {
+  std::lock_guard lock(tracked_mutex_);
+  tracked_.push_back({topic, nullptr, reader});
+}
+
+void Participant::Untrack(const void* endpoint) {
+  std::lock_guard lock(tracked_mutex_);
+  std::erase_if(tracked_, [endpoint](const Tracked& t) {
+    return t.writer == endpoint || t.reader == endpoint;
+  });
+}
+
+std::vector<EndpointMatchCount> Participant::Matches() const {
+  std::lock_guard lock(tracked_mutex_);
+  std::vector<EndpointMatchCount> out;
+  out.reserve(tracked_.size());
+  for (const Tracked& t : tracked_)
+    out.push_back({t.topic, t.writer != nullptr, t.writer ? t.writer->MatchedReaders() : t.reader->MatchedWriters()});
+  return out;
 }
 
 }  // namespace rslam::bus

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <string>
 #include <utility>
@@ -127,6 +128,13 @@ class RawReader {
   virtual void Interrupt() = 0;
 };
 
+// A typed reader or writer of a participant and how many remote endpoints it has matched.
+struct EndpointMatchCount {
+  std::string topic;
+  bool writer = false;
+  int matched = 0;
+};
+
 class Participant {
  public:
   // Joins config.domain_id with config.vendor(). Throws BusError (or ConfigError) naming what
@@ -140,6 +148,13 @@ class Participant {
   virtual std::unique_ptr<RawWriter> CreateRawWriter(const TopicSpec& spec) = 0;
   virtual std::unique_ptr<RawReader> CreateRawReader(const TopicSpec& spec) = 0;
 
+  // Publisher<T> and Subscriber<T> register their endpoint for as long as they live, so that
+  // Matches() (the heartbeat's endpoint list) can say how far discovery has got.
+  void Track(const std::string& topic, const RawWriter* writer);
+  void Track(const std::string& topic, const RawReader* reader);
+  void Untrack(const void* endpoint);
+  std::vector<EndpointMatchCount> Matches() const;
+
   const BusConfig& config() const { return config_; }
   Vendor vendor() const { return config_.vendor(); }
   const std::string& robot_id() const { return config_.robot_id; }
@@ -149,6 +164,13 @@ class Participant {
 
  private:
   const BusConfig config_;
+  struct Tracked {
+    std::string topic;
+    const RawWriter* writer = nullptr;
+    const RawReader* reader = nullptr;
+  };
+  mutable std::mutex tracked_mutex_;
+  std::vector<Tracked> tracked_;
 };
 
 // Vendor back-ends (defined in cyclone_participant.cc and fastdds_participant.cc).

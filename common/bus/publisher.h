@@ -19,8 +19,14 @@ template <Message T>
 class Publisher {
  public:
   Publisher(Participant& participant, const Topic<T>& topic)
-      : writer_(participant.CreateRawWriter(TopicSpec{std::string(topic.name), MessageTraits<T>::kTypeName,
-                                                      KeyReaderFor<T>(), topic.qos, participant.robot_id()})) {}
+      : participant_(participant),
+        writer_(participant.CreateRawWriter(TopicSpec{std::string(topic.name), MessageTraits<T>::kTypeName,
+                                                      KeyReaderFor<T>(), topic.qos, participant.robot_id()})) {
+    participant_.Track(std::string(topic.name), writer_.get());
+  }
+  ~Publisher() { participant_.Untrack(writer_.get()); }
+  Publisher(const Publisher&) = delete;
+  Publisher& operator=(const Publisher&) = delete;
 
   // Thread-safe. Throws BusError if a reliable reader stays blocked beyond the preset's limit.
   void Publish(const T& msg) {
@@ -50,6 +56,7 @@ class Publisher {
   bool WaitForAcknowledgments(std::chrono::milliseconds timeout) { return writer_->WaitForAcknowledgments(timeout); }
 
  private:
+  Participant& participant_;
   std::unique_ptr<RawWriter> writer_;
   std::mutex mutex_;
   std::atomic<uint64_t> published_{0};

@@ -32,11 +32,14 @@ class Subscriber {
 
   // partition: empty = this participant's robot; a robot id; or kAllRobots.
   Subscriber(Participant& participant, const Topic<T>& topic, std::string partition = {})
-      : topic_name_(topic.name),
+      : participant_(participant),
+        topic_name_(topic.name),
         reader_(participant.CreateRawReader(TopicSpec{std::string(topic.name), MessageTraits<T>::kTypeName,
                                                       KeyReaderFor<T>(), topic.qos,
                                                       partition.empty() ? participant.robot_id() : partition,
-                                                      CodecFor<T>()})) {}
+                                                      CodecFor<T>()})) {
+    participant_.Track(topic_name_, reader_.get());
+  }
 
   Subscriber(Participant& participant, const Topic<T>& topic, Callback callback, std::string partition = {})
       : Subscriber(participant, topic, std::move(partition)) {
@@ -48,6 +51,7 @@ class Subscriber {
     stop_ = true;
     reader_->Interrupt();
     if (thread_.joinable()) thread_.join();
+    participant_.Untrack(reader_.get());
   }
 
   Subscriber(const Subscriber&) = delete;
@@ -125,6 +129,7 @@ class Subscriber {
     }
   }
 
+  Participant& participant_;
   const std::string topic_name_;
   std::unique_ptr<RawReader> reader_;
   std::vector<RawSample> raw_;

@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <map>
+
 namespace rslam {
 
 Heartbeat::Heartbeat(ServiceContext& context)
@@ -23,7 +25,30 @@ void Heartbeat::Publish(const std::string& state) {
   s.processing_ms_mean = context_.stats().mean_ms();
   s.processing_ms_max = context_.stats().max_ms();
   s.state = state;
+  for (const bus::EndpointMatchCount& e : context_.participant().Matches())
+    s.endpoints.push_back({e.topic, e.writer, static_cast<uint32_t>(e.matched)});
   publisher_.Publish(s);
+}
+
+std::vector<std::string> UnmatchedLinks(const std::vector<msg::ServiceStatus>& services) {
+  std::map<std::string, uint32_t> writers, readers;  // topic -> services with a writer / reader of it
+  for (const msg::ServiceStatus& s : services) {
+    std::map<std::string, bool> writes, reads;
+    for (const msg::EndpointMatch& e : s.endpoints) (e.writer ? writes : reads)[e.topic] = true;
+    for (const auto& [topic, _] : writes) ++writers[topic];
+    for (const auto& [topic, _] : reads) ++readers[topic];
+  }
+  std::vector<std::string> unmatched;
+  for (const msg::ServiceStatus& s : services) {
+    for (const msg::EndpointMatch& e : s.endpoints) {
+      const auto& table = e.writer ? readers : writers;
+      const auto others = table.find(e.topic);
+      if (others == table.end() || e.matched >= others->second) continue;
+      unmatched.push_back(s.service + ": " + (e.writer ? "writer" : "reader") + " of " + e.topic + " matched " +
+                          std::to_string(e.matched) + " of " + std::to_string(others->second));
+    }
+  }
+  return unmatched;
 }
 
 }  // namespace rslam

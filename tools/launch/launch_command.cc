@@ -55,7 +55,8 @@ void RegisterLaunchCommand(CLI::App& rslam) {
     try {
       profile = LoadLaunchProfile(args->profile, DeployDir() + "/launch");
     } catch (const ConfigError& e) {
-      throw CLI::RuntimeError(std::string("rslam launch: ") + e.what(), 2);
+      std::cerr << "rslam launch: " << e.what() << std::endl;  // CLI11 exits silently on RuntimeError
+      throw CLI::RuntimeError(2);
     }
     if (!args->options.log_dir.empty()) fs::create_directories(args->options.log_dir);
     BlockShutdownSignals();
@@ -98,7 +99,8 @@ struct DiagnosticBusArgs {
       if (!robot.empty()) config.robot_id = robot;
       config.Validate();
     } catch (const ConfigError& e) {
-      throw CLI::RuntimeError(std::string("config error: ") + e.what(), 2);
+      std::cerr << "config error: " << e.what() << std::endl;  // CLI11 exits silently on RuntimeError
+      throw CLI::RuntimeError(2);
     }
     return config;
   }
@@ -158,11 +160,16 @@ void RegisterStatusCommand(CLI::App& rslam) {
     }
     if (args->json) {
       nlohmann::json out = nlohmann::json::array();
-      for (const auto& [key, s] : latest)
+      for (const auto& [key, s] : latest) {
+        nlohmann::json endpoints = nlohmann::json::array();
+        for (const msg::EndpointMatch& e : s.endpoints)
+          endpoints.push_back({{"topic", e.topic}, {"writer", e.writer}, {"matched", e.matched}});
         out.push_back({{"robot", s.header.robot_id}, {"service", s.service}, {"pid", s.pid}, {"state", s.state},
                        {"dds", s.dds_vendor}, {"uptime_s", s.uptime_s}, {"messages_in", s.messages_in},
                        {"messages_out", s.messages_out}, {"messages_rejected", s.messages_rejected},
-                       {"processing_ms_mean", s.processing_ms_mean}, {"last_frame", s.header.frame_seq}});
+                       {"processing_ms_mean", s.processing_ms_mean}, {"last_frame", s.header.frame_seq},
+                       {"endpoints", endpoints}});
+      }
       std::cout << out.dump(2) << std::endl;
       return;
     }
@@ -172,13 +179,19 @@ void RegisterStatusCommand(CLI::App& rslam) {
     }
     std::cout << std::left << std::setw(10) << "ROBOT" << std::setw(16) << "SERVICE" << std::setw(9) << "STATE"
               << std::setw(8) << "PID" << std::setw(9) << "DDS" << std::setw(10) << "UPTIME" << std::setw(10) << "IN"
-              << std::setw(10) << "OUT" << std::setw(9) << "REJECTED" << "MS/MSG\n";
-    for (const auto& [key, s] : latest)
+              << std::setw(10) << "OUT" << std::setw(9) << "REJECTED" << std::setw(9) << "MS/MSG"
+              << "UNMATCHED\n";
+    for (const auto& [key, s] : latest) {
+      // Readers no writer has matched and writers no reader has: a stage whose input is missing.
+      std::string unmatched;
+      for (const msg::EndpointMatch& e : s.endpoints)
+        if (e.matched == 0) unmatched += (unmatched.empty() ? "" : " ") + std::string(e.writer ? ">" : "<") + e.topic;
       std::cout << std::left << std::setw(10) << s.header.robot_id << std::setw(16) << s.service << std::setw(9)
                 << s.state << std::setw(8) << s.pid << std::setw(9) << s.dds_vendor << std::setw(10)
                 << (std::to_string(static_cast<int>(s.uptime_s)) + "s") << std::setw(10) << s.messages_in
                 << std::setw(10) << s.messages_out << std::setw(9) << s.messages_rejected << std::fixed
-                << std::setprecision(3) << s.processing_ms_mean << "\n";
+                << std::setprecision(3) << std::setw(9) << s.processing_ms_mean << unmatched << "\n";
+    }
   });
 }
 

@@ -4,10 +4,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
-#include <type_traits>
 
 #include "common/bus/bus_config.h"
 #include "common/bus/topics.h"
+#include "common/node/heartbeat.h"
 
 namespace rslam::system_test {
 
@@ -34,14 +34,14 @@ ServicePipeline::ServicePipeline(int domain, PipelineOptions options) : domain_(
   status_subscriber_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(
       *participant_, bus::topics::kStatus, [this](const msg::ServiceStatus& status) {
         std::lock_guard lock(mutex_);
-        running_[status.service] = status.state;
+        statuses_[status.service] = status;
       });
   const auto await_running = [this](const std::vector<std::string>& names) {
     const bool up = testing::WaitFor(
         [&] {
           std::lock_guard lock(mutex_);
           for (const auto& n : names)
-            if (running_.count(n) == 0 || running_.at(n) != "running") return false;
+            if (statuses_.count(n) == 0 || statuses_.at(n).state != "running") return false;
           return true;
         },
         options_.startup_timeout);
@@ -61,26 +61,23 @@ ServicePipeline::ServicePipeline(int domain, PipelineOptions options) : domain_(
 
 // "Running" says a service's readers and writers exist, not that discovery has matched them:
 // across vendors that can take a second, and a stream sample written before its reader matched
-// is never delivered (the first frames' odometry would be lost). A probe reader on each stage's
-// input, of the reading service's vendor, matching the writer's means that pair has had the time.
+// is never delivered (the first frames' odometry would be lost). The camera starts once the
+// heartbeats show every link among the services matched at both ends.
 void ServicePipeline::AwaitDiscovery() {
-  const auto vendor_of = [this](const std::string& service) {
-    const auto it = options_.vendors.find(service);
-    return it == options_.vendors.end() ? std::string("cyclone") : it->second;
-  };
-  const auto await_writer = [this](const std::string& vendor, const auto& topic) {
-    bus::BusConfig config;
-    config.domain_id = domain_;
-    config.dds = vendor;
-    const auto probe = bus::Participant::Create(config);
-    using Message = typename std::decay_t<decltype(topic)>::Type;
-    const bus::Subscriber<Message> reader(*probe, topic, [](const Message&) {});
-    if (!reader.WaitForPublishers(1, options_.startup_timeout))
-      throw std::runtime_error(std::string(topic.name) + " never matched a " + vendor + " reader\n" + Logs());
-  };
-  await_writer(vendor_of("pose-cells"), bus::topics::kOdometryVelocity);
-  await_writer(vendor_of("pose-cells"), bus::topics::kTemplatesView);
-  await_writer(vendor_of("experience-map"), bus::topics::kPoseCellsAction);
+  std::vector<std::string> unmatched;
+  const bool ready = testing::WaitFor(
+      [&] {
+        std::lock_guard lock(mutex_);
+        std::vector<msg::ServiceStatus> latest;
+        for (const auto& [name, status] : statuses_) latest.push_back(status);
+        unmatched = UnmatchedLinks(latest);
+        return unmatched.empty();
+      },
+      options_.startup_timeout);
+  if (ready) return;
+  std::string list;
+  for (const auto& u : unmatched) list += u + "\n";
+  throw std::runtime_error("discovery never matched:\n" + list + Logs());
 }
 
 ServicePipeline::~ServicePipeline() {
