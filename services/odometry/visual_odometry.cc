@@ -1,5 +1,7 @@
 #include "services/odometry/visual_odometry.h"
 
+#include "common/image/crop.h"
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -197,22 +199,6 @@ void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, std::vect
   const float scale = 1.0f / (255.0f * static_cast<float>(crop.height));
   for (int x = 0; x < crop.width; ++x) profile[x] = static_cast<float>(sums[x]) * scale;
 }
-
-namespace {
-
-cv::Rect ResolveCrop(int x_min, int x_max, int y_min, int y_max, cv::Size image, const char* name) {
-  const int x_end = x_max == -1 ? image.width : x_max;
-  const int y_end = y_max == -1 ? image.height : y_max;
-  if (x_end > image.width || y_end > image.height || x_min >= x_end || y_min >= y_end) {
-    throw std::invalid_argument(std::string(name) + " crop x [" + std::to_string(x_min) + ", " +
-                                std::to_string(x_end) + ") y [" + std::to_string(y_min) + ", " +
-                                std::to_string(y_end) + ") does not fit the " + std::to_string(image.width) + "x" +
-                                std::to_string(image.height) + " image");
-  }
-  return cv::Rect(x_min, y_min, x_end - x_min, y_end - y_min);
-}
-
-}  // namespace
 
 VisualOdometry::VisualOdometry(VisualOdometryConfig config) : config_(std::move(config)) { config_.Validate(); }
 

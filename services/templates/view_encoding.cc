@@ -1,5 +1,7 @@
 #include "services/templates/view_encoding.h"
 
+#include "common/image/crop.h"
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -72,17 +74,8 @@ cv::Rect ViewEncoder::ResolveCrop(const cv::Mat& image) const {
     throw std::invalid_argument("TemplateLibrary: image must be CV_8UC1 (grey), CV_8UC3 (BGR) or CV_8UC4 (BGRA), got type " +
                                 std::to_string(image.type()));
   }
-  const int x_end = config_.image_crop_x_max == -1 ? image.cols : config_.image_crop_x_max;
-  const int y_end = config_.image_crop_y_max == -1 ? image.rows : config_.image_crop_y_max;
-  if (x_end > image.cols || y_end > image.rows || config_.image_crop_x_min >= x_end ||
-      config_.image_crop_y_min >= y_end) {
-    throw std::invalid_argument("TemplateLibrary: crop x [" + std::to_string(config_.image_crop_x_min) + ", " +
-                                std::to_string(x_end) + ") y [" + std::to_string(config_.image_crop_y_min) + ", " +
-                                std::to_string(y_end) + ") does not fit the " + std::to_string(image.cols) + "x" +
-                                std::to_string(image.rows) + " image");
-  }
-  return cv::Rect(config_.image_crop_x_min, config_.image_crop_y_min, x_end - config_.image_crop_x_min,
-                  y_end - config_.image_crop_y_min);
+  return rslam::ResolveCrop(config_.image_crop_x_min, config_.image_crop_x_max, config_.image_crop_y_min,
+                           config_.image_crop_y_max, image.size(), "TemplateLibrary:");
 }
 
 void ViewEncoder::Encode(const cv::Mat& image, EncodedView& out) const {

@@ -1,5 +1,6 @@
 #include "tools/run/ratslam_runner.h"
 
+#include "common/image/crop.h"
 #include "services/experience_map/experience_action_message.h"
 #include "services/pose_cells/pose_cell_action_message.h"
 #include "tools/run/grey_rows.h"
@@ -38,10 +39,10 @@ std::pair<int, int> RowsTheStagesRead(const RatSlamConfig& config, int rows) {
   };
   int begin = rows, end = 0;
   for (auto [y_min, y_max] : crops) {
-    const int y_end = y_max == -1 ? rows : y_max;
-    if (y_min < 0 || y_end > rows || y_min >= y_end) return {0, rows};
-    begin = std::min(begin, y_min);
-    end = std::max(end, y_end);
+    const auto crop = FitCrop(0, -1, y_min, y_max, cv::Size(1, rows));
+    if (!crop) return {0, rows};  // the stage itself refuses the frame, naming its crop
+    begin = std::min(begin, crop->y);
+    end = std::max(end, crop->y + crop->height);
   }
   return {begin, end};
 }
