@@ -2,12 +2,14 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
 
 #include "common/config/config_error.h"
+#include "common/node/heartbeat.h"
 #include "common/node/shutdown_signal.h"
 
 namespace rslam::sim {
@@ -74,6 +76,11 @@ SimNode::SimNode(ServiceContext& context, const Config& config)
   command_sub_ = context_.Subscribe<msg::MotionCommand>(bus::topics::kExplorerCommand,
                                                         [this](const msg::MotionCommand& c) { OnCommand(c); });
   if (config_.rate_hz == 0) SubscribeLockstepTopics();
+  status_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(
+      context_.participant(), bus::topics::kStatus, [this](const msg::ServiceStatus& status) {
+        std::lock_guard lock(mutex_);
+        statuses_[status.service] = status;
+      });
   const Pose2D start = robot_.pose();
   spdlog::info("world {} ({}x{} cells of {} m), start ({:.2f}, {:.2f}, {:.2f}), {}", config_.sim.world_yaml,
                world_.width(), world_.height(), world_.resolution(), start.x, start.y, start.theta,
@@ -85,6 +92,7 @@ SimNode::SimNode(ServiceContext& context, const Config& config)
 SimNode::~SimNode() {
   // Subscriber callbacks use the mutex: end them before anything else goes.
   command_sub_.reset();
+  status_sub_.reset();
   lockstep_matched_.clear();
   lockstep_subs_.clear();
   {
@@ -94,6 +102,23 @@ SimNode::~SimNode() {
   wake_.notify_all();
   if (thread_.joinable()) thread_.join();
   spdlog::info("published {} frames", frames_published_.load());
+}
+
+std::vector<std::string> SimNode::UnlinkedServices() {
+  std::lock_guard lock(mutex_);
+  std::vector<msg::ServiceStatus> latest;
+  for (const auto& [name, status] : statuses_) latest.push_back(status);
+  std::vector<std::string> missing = UnmatchedLinks(latest);
+  if (config_.rate_hz == 0) {
+    for (const std::string& topic : config_.lockstep_topics) {
+      const bool written = std::any_of(latest.begin(), latest.end(), [&](const msg::ServiceStatus& s) {
+        return std::any_of(s.endpoints.begin(), s.endpoints.end(),
+                           [&](const msg::EndpointMatch& e) { return e.writer && e.topic == topic; });
+      });
+      if (!written) missing.push_back("no service's heartbeat shows a writer of " + topic);
+    }
+  }
+  return missing;
 }
 
 void SimNode::SubscribeLockstepTopics() {
@@ -250,25 +275,29 @@ void SimNode::PublishFrame(const SimFrame& frame, const msg::Header& header) {
 void SimNode::Run() {
   try {
     // Frames published before the pipeline listens are lost, and in lockstep a lost frame stalls
-    // the start until the startup timeout: wait for the camera service to read sim/camera and for
-    // the lockstep stages to publish, then give the services between them time to match too.
+    // the start until the startup timeout: wait for the camera service to read sim/camera, for
+    // the lockstep stages to publish, and for the heartbeats to show the services in between
+    // matched to each other.
     auto pipeline_ready = [this] {
       if (camera_pub_->MatchedSubscribers() < 1) return false;
       for (const auto& matched : lockstep_matched_)
         if (matched() < 1) return false;
-      return true;
+      return UnlinkedServices().empty();
     };
-    const auto pipeline_deadline = Clock::now() + Seconds(config_.wait_for_pipeline_s);
-    while (!pipeline_ready() && Clock::now() < pipeline_deadline) {
+    const auto wait_start = Clock::now();
+    const auto pipeline_deadline = wait_start + Seconds(config_.wait_for_pipeline_s);
+    while (config_.wait_for_pipeline_s > 0 && !pipeline_ready()) {
+      if (Clock::now() >= pipeline_deadline) {
+        spdlog::warn("pipeline not (fully) there after {} s; publishing anyway (camera readers {}; {})",
+                     config_.wait_for_pipeline_s, camera_pub_->MatchedSubscribers(),
+                     fmt::join(UnlinkedServices(), "; "));
+        break;
+      }
       std::unique_lock lock(mutex_);
       if (wake_.wait_for(lock, std::chrono::milliseconds(20), [this] { return stop_; })) return;
     }
-    if (!pipeline_ready()) {
-      spdlog::warn("pipeline not (fully) there after {} s; publishing anyway", config_.wait_for_pipeline_s);
-    } else if (config_.wait_for_pipeline_s > 0) {
-      std::unique_lock lock(mutex_);
-      if (wake_.wait_for(lock, Seconds(config_.pipeline_settle_s), [this] { return stop_; })) return;
-    }
+    spdlog::info("first frame after {:.2f} s waiting for the pipeline",
+                 std::chrono::duration<double>(Clock::now() - wait_start).count());
     const double dt = config_.sim.motion.time_step_s;
     const auto rate_start = Clock::now();
     SimFrame frame;

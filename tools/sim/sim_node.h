@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -25,6 +26,7 @@
 #include <thread>
 #include <vector>
 
+#include "common/bus/subscriber.h"
 #include "common/node/service_context.h"
 #include "tools/sim/frame_pacer.h"
 #include "tools/sim/sim_node_config.h"
@@ -67,6 +69,9 @@ class SimNode {
   void PublishFrame(const SimFrame& frame, const msg::Header& header);
   void PublishFeedback(const msg::Header& header, uint64_t command_seq, msg::MotionState state);
   void SubscribeLockstepTopics();
+  // What the services' heartbeats show still unmatched among them (and, in lockstep, lockstep
+  // topics no service writes yet); empty = a frame published now reaches every stage.
+  std::vector<std::string> UnlinkedServices();
 
   ServiceContext& context_;
   const Config config_;
@@ -80,6 +85,8 @@ class SimNode {
   std::shared_ptr<void> command_sub_;
   std::vector<std::shared_ptr<void>> lockstep_subs_;
   std::vector<std::function<int()>> lockstep_matched_;  // matched publishers per lockstep topic
+  std::unique_ptr<bus::Subscriber<msg::ServiceStatus>> status_sub_;
+  std::map<std::string, msg::ServiceStatus> statuses_;  // latest heartbeat per service (mutex_)
 
   std::mutex mutex_;
   std::condition_variable wake_;

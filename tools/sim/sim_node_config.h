@@ -35,11 +35,10 @@ struct SimNodeConfig {
   // A stage that has never reported is waited for this long after the first frame (services
   // start, join the bus and discover each other in this time).
   double startup_timeout_s = 15.0;
-  // Before the first frame, wait up to this long for a reader of sim/camera (the camera service)
-  // and a publisher on every lockstep topic, then pipeline_settle_s more for the services in
-  // between to match each other. 0 = start at once.
+  // Before the first frame, wait up to this long for a reader of sim/camera (the camera service),
+  // a publisher on every lockstep topic, and heartbeats showing the services in between matched
+  // to each other. 0 = start at once.
   double wait_for_pipeline_s = 20.0;
-  double pipeline_settle_s = 1.0;
   // Frames to publish (0 = unlimited); then the process stops (exit 0).
   int64_t max_frames = 0;
 
@@ -54,8 +53,8 @@ struct SimNodeConfig {
     v("lockstep_timeout_s", lockstep_timeout_s, "lockstep: a stage silent this long is not waited for");
     v("startup_timeout_s", startup_timeout_s, "lockstep: how long a stage that never reported is waited for");
     v("wait_for_pipeline_s", wait_for_pipeline_s,
-      "before frame 0, wait up to this long for a sim/camera reader and the lockstep topics' publishers");
-    v("pipeline_settle_s", pipeline_settle_s, "then wait this long for the services in between to match");
+      "before frame 0, wait up to this long for a sim/camera reader, the lockstep topics' publishers and "
+      "the services' heartbeats showing them matched to each other");
     v("max_frames", max_frames, "frames to publish, then stop (0 = unlimited)");
   }
 
@@ -75,7 +74,6 @@ struct SimNodeConfig {
     Require(std::isfinite(lockstep_timeout_s) && lockstep_timeout_s > 0, "lockstep_timeout_s", "must be positive");
     Require(std::isfinite(startup_timeout_s) && startup_timeout_s >= 0, "startup_timeout_s", "must be >= 0");
     Require(std::isfinite(wait_for_pipeline_s) && wait_for_pipeline_s >= 0, "wait_for_pipeline_s", "must be >= 0");
-    Require(std::isfinite(pipeline_settle_s) && pipeline_settle_s >= 0, "pipeline_settle_s", "must be >= 0");
     Require(max_frames >= 0, "max_frames", "must be >= 0");
   }
 
