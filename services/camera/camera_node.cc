@@ -12,7 +12,7 @@
 #include <thread>
 
 #include "common/node/shutdown_signal.h"
-#include "services/camera/downstream_pacer.h"
+#include "common/node/frame_pacer.h"
 #include "services/camera/frame_preparation.h"
 #include "services/camera/frame_source.h"
 #include "services/camera/image_message.h"
@@ -286,7 +286,7 @@ class CameraNode::Impl {
   const FramePreparation preparation_;
   const bool live_;
   const bool lockstep_;
-  DownstreamPacer pacer_;  // guarded by mutex_
+  FramePacer pacer_;  // guarded by mutex_
   std::weak_ptr<Impl> self_;
   std::shared_ptr<bus::Publisher<msg::Image>> publisher_;
   std::unique_ptr<FrameSource> source_;

@@ -56,7 +56,7 @@ struct CameraNodeConfig {
   int wait_for_readers = 1;             // recorded sources: readers to wait for before frame 0
   double wait_for_readers_timeout_s = 10.0;
   double ack_timeout_s = 10.0;          // rate_hz 0: longest wait for one frame's acknowledgments
-  // rate_hz 0: per-frame outputs of the pipeline whose frame_seq paces the camera (downstream_pacer.h).
+  // rate_hz 0: per-frame outputs of the pipeline whose frame_seq paces the camera (common/node/frame_pacer.h).
   std::vector<std::string> lockstep_topics = {"odometry/velocity", "templates/view"};
   int max_frames_in_flight = 4;         // below the sensor preset's depth (8): nothing is overwritten
   double lockstep_timeout_s = 2.0;      // a stage silent this long is not waited for
@@ -85,7 +85,7 @@ struct CameraNodeConfig {
     v("lockstep_topics", lockstep_topics,
       "rate_hz 0: per-frame topics (odometry/velocity, templates/view, pose_cells/action, experience_map/pose, "
       "occupancy/profile) whose frame_seq must catch up before more frames go out; [] = acknowledgments only");
-    v("max_frames_in_flight", max_frames_in_flight, "rate_hz 0: frames published ahead of the slowest stage (0..7)");
+    v("max_frames_in_flight", max_frames_in_flight, "rate_hz 0: frames published ahead of the slowest stage (1..7)");
     v("lockstep_timeout_s", lockstep_timeout_s, "rate_hz 0: a stage silent this long is not waited for");
     v("lockstep_startup_timeout_s", lockstep_startup_timeout_s,
       "rate_hz 0: how long a stage that never reported is waited for");
@@ -116,8 +116,8 @@ struct CameraNodeConfig {
       Require(IsLockstepTopic(topic), "lockstep_topics",
               "unknown per-frame topic '" + topic +
                   "' (odometry/velocity, templates/view, pose_cells/action, experience_map/pose, occupancy/profile)");
-    Require(max_frames_in_flight >= 0 && max_frames_in_flight <= 7, "max_frames_in_flight",
-            "must be in 0..7 (below the camera topic's keep-last depth of 8)");
+    Require(max_frames_in_flight >= 1 && max_frames_in_flight <= 7, "max_frames_in_flight",
+            "must be in 1..7 (below the camera topic's keep-last depth of 8)");
     Require(std::isfinite(lockstep_timeout_s) && lockstep_timeout_s > 0, "lockstep_timeout_s", "must be positive");
     Require(std::isfinite(lockstep_startup_timeout_s) && lockstep_startup_timeout_s >= 0,
             "lockstep_startup_timeout_s", "must be >= 0");

@@ -27,8 +27,8 @@
 #include <vector>
 
 #include "common/bus/subscriber.h"
+#include "common/node/frame_pacer.h"
 #include "common/node/service_context.h"
-#include "tools/sim/frame_pacer.h"
 #include "tools/sim/sim_node_config.h"
 #include "tools/sim/simulated_robot.h"
 #include "tools/sim/world_map.h"

@@ -64,8 +64,8 @@ struct SimNodeConfig {
     for (double value : start_pose) Require(std::isfinite(value), "start_pose", "must be finite");
     Require(start_stamp_ns >= 0, "start_stamp_ns", "must be >= 0");
     Require(std::isfinite(rate_hz) && rate_hz >= 0 && rate_hz <= 10000, "rate_hz", "must be in [0, 10000]");
-    Require(max_frames_in_flight >= 0 && max_frames_in_flight <= 1000, "max_frames_in_flight",
-            "must be in [0, 1000]");
+    Require(max_frames_in_flight >= 1 && max_frames_in_flight <= 1000, "max_frames_in_flight",
+            "must be in [1, 1000]");
     for (const auto& topic : lockstep_topics)
       Require(IsLockstepTopic(topic), "lockstep_topics",
               "unknown per-frame topic '" + topic +

@@ -1,10 +1,10 @@
-#include "tools/sim/frame_pacer.h"
+#include "common/node/frame_pacer.h"
 
 #include <algorithm>
 #include <stdexcept>
 #include <string>
 
-namespace rslam::sim {
+namespace rslam {
 
 FramePacer::FramePacer(int stage_count, int max_frames_in_flight, Clock::duration stage_timeout,
                        Clock::duration startup_timeout)
@@ -13,7 +13,8 @@ FramePacer::FramePacer(int stage_count, int max_frames_in_flight, Clock::duratio
       startup_timeout_(startup_timeout),
       stages_(static_cast<size_t>(std::max(stage_count, 0))) {
   if (stage_count < 0) throw std::invalid_argument("FramePacer: negative stage count");
-  if (max_frames_in_flight < 0) throw std::invalid_argument("FramePacer: negative max_frames_in_flight");
+  // With none in flight not even the first frame could go before it was processed.
+  if (max_frames_in_flight < 1) throw std::invalid_argument("FramePacer: max_frames_in_flight must be at least 1");
   if (stage_timeout < Clock::duration::zero() || startup_timeout < Clock::duration::zero())
     throw std::invalid_argument("FramePacer: negative timeout");
 }
@@ -60,4 +61,4 @@ std::optional<uint64_t> FramePacer::LastReported(int stage) const {
   return stages_[static_cast<size_t>(stage)].last_seq;
 }
 
-}  // namespace rslam::sim
+}  // namespace rslam

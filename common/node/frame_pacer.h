@@ -1,10 +1,13 @@
 #pragma once
-// Lockstep pacing of the simulator: frame N may be published once every live downstream stage
-// has reported frame >= N - max_frames_in_flight, so the simulated world never runs ahead of the
-// pipeline (no dropped frames, the same map at any machine speed) and never waits for a stage
-// that is not there:
+// Lockstep pacing of a frame source (the simulator, or the camera service on a recorded source
+// with rate_hz 0): frame N may be published once every live downstream stage has reported frame
+// >= N - max_frames_in_flight, so the source never runs ahead of the pipeline (no dropped frames,
+// the same map at any machine speed) and never waits for a stage that is not there:
 //   - a stage that has reported is live while its last report is younger than stage_timeout;
 //   - a stage that has never reported is waited for until startup_timeout after the first frame.
+// Each per-frame service (odometry, templates, ...) publishes one output per frame with the
+// frame's seq; those are the reports. DDS acknowledgments would not do: a reliable keep-last reader
+// acknowledges a sample when it reaches the reader's cache, not when the application takes it.
 // Pure logic: the caller passes the (steady) clock readings.
 
 #include <chrono>
@@ -12,13 +15,13 @@
 #include <optional>
 #include <vector>
 
-namespace rslam::sim {
+namespace rslam {
 
 class FramePacer {
  public:
   using Clock = std::chrono::steady_clock;
 
-  // Throws std::invalid_argument on a negative max_frames_in_flight or timeout.
+  // Throws std::invalid_argument on max_frames_in_flight < 1 or a negative timeout.
   FramePacer(int stage_count, int max_frames_in_flight, Clock::duration stage_timeout,
              Clock::duration startup_timeout);
 
@@ -48,4 +51,4 @@ class FramePacer {
   std::vector<Stage> stages_;
 };
 
-}  // namespace rslam::sim
+}  // namespace rslam

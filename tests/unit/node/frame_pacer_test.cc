@@ -1,13 +1,13 @@
-// The simulator's lockstep pacing: frames wait for the slowest live stage, never for a stage that
+// Lockstep pacing of a frame source (the simulator, the camera service): frames wait for the slowest live stage, never for a stage that
 // is gone or never came up.
 
-#include "tools/sim/frame_pacer.h"
+#include "common/node/frame_pacer.h"
 
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 
-namespace rslam::sim {
+namespace rslam {
 namespace {
 
 using std::chrono::milliseconds;
@@ -37,17 +37,18 @@ TEST(FramePacerTest, WaitsForTheSlowestStage) {
 }
 
 TEST(FramePacerTest, StopsWaitingForASilentStageAndResumesWhenItReports) {
-  FramePacer pacer(2, 0, seconds(2), seconds(10));
+  FramePacer pacer(2, 1, seconds(2), seconds(10));
   const auto t0 = Clock::time_point{} + seconds(100);
   pacer.Start(t0);
   pacer.Report(0, 10, t0);
   pacer.Report(1, 10, t0);
-  EXPECT_FALSE(pacer.MayPublish(11, t0 + seconds(1)));
+  EXPECT_TRUE(pacer.MayPublish(11, t0));  // one frame in flight
+  EXPECT_FALSE(pacer.MayPublish(12, t0 + seconds(1)));
   pacer.Report(0, 11, t0 + seconds(1));
-  EXPECT_FALSE(pacer.MayPublish(11, t0 + seconds(1)));  // stage 1 still live, behind
-  EXPECT_TRUE(pacer.MayPublish(11, t0 + seconds(3)));   // stage 1 silent for 3 s: gone
+  EXPECT_FALSE(pacer.MayPublish(12, t0 + seconds(1)));  // stage 1 still live, behind
+  EXPECT_TRUE(pacer.MayPublish(12, t0 + seconds(3)));   // stage 1 silent for 3 s: gone
   pacer.Report(1, 11, t0 + seconds(4));                 // back (restarted)
-  EXPECT_FALSE(pacer.MayPublish(12, t0 + seconds(4)));
+  EXPECT_FALSE(pacer.MayPublish(13, t0 + seconds(4)));
 }
 
 TEST(FramePacerTest, WaitsForAStageThatNeverReportedOnlyUntilTheStartupTimeout) {
@@ -60,24 +61,25 @@ TEST(FramePacerTest, WaitsForAStageThatNeverReportedOnlyUntilTheStartupTimeout) 
 }
 
 TEST(FramePacerTest, SaysWhenAFrameGoesOnlyBecauseAStageIsAbsent) {
-  FramePacer pacer(2, 0, seconds(2), seconds(10));
+  FramePacer pacer(2, 1, seconds(2), seconds(10));
   const auto t0 = Clock::time_point{} + seconds(100);
   pacer.Start(t0);
   pacer.Report(0, 10, t0);
   pacer.Report(1, 10, t0);
-  EXPECT_FALSE(pacer.PassingAbsentStage(10, t0));  // everyone is there
-  EXPECT_TRUE(pacer.PassingAbsentStage(11, t0 + seconds(3)));
-  EXPECT_TRUE(pacer.MayPublish(11, t0 + seconds(3)));
+  EXPECT_FALSE(pacer.PassingAbsentStage(11, t0));  // everyone is there
+  EXPECT_TRUE(pacer.PassingAbsentStage(12, t0 + seconds(3)));
+  EXPECT_TRUE(pacer.MayPublish(12, t0 + seconds(3)));
 }
 
 TEST(FramePacerTest, NoStagesMeansNoWaiting) {
-  FramePacer pacer(0, 0, seconds(2), seconds(10));
+  FramePacer pacer(0, 1, seconds(2), seconds(10));
   pacer.Start(Clock::time_point{});
   EXPECT_TRUE(pacer.MayPublish(1000, Clock::time_point{}));
 }
 
 TEST(FramePacerTest, RejectsBadArguments) {
   EXPECT_THROW(FramePacer(1, -1, seconds(1), seconds(1)), std::invalid_argument);
+  EXPECT_THROW(FramePacer(1, 0, seconds(1), seconds(1)), std::invalid_argument);
   EXPECT_THROW(FramePacer(1, 1, seconds(-1), seconds(1)), std::invalid_argument);
   FramePacer pacer(1, 1, seconds(1), seconds(1));
   EXPECT_THROW(pacer.Report(1, 0, Clock::time_point{}), std::out_of_range);
@@ -85,4 +87,4 @@ TEST(FramePacerTest, RejectsBadArguments) {
 }
 
 }  // namespace
-}  // namespace rslam::sim
+}  // namespace rslam
