@@ -1,5 +1,7 @@
 #include "common/persistence/state_file.h"
 
+#include <spdlog/spdlog.h>
+
 #include <array>
 #include <cstdio>
 #include <cstring>
@@ -81,6 +83,17 @@ void WriteStateFile(const std::string& path, const std::string& kind, uint32_t v
   std::error_code ec;
   std::filesystem::rename(tmp, target, ec);
   if (ec) throw StateFileError(path + ": cannot rename into place: " + ec.message());
+}
+
+bool WriteStateFileOrLog(const std::string& path, const std::string& kind, uint32_t version,
+                         const google::protobuf::MessageLite& message) {
+  try {
+    WriteStateFile(path, kind, version, message);
+    return true;
+  } catch (const std::exception& e) {
+    spdlog::error("could not save state: {}", e.what());
+    return false;
+  }
 }
 
 uint32_t ReadStateFile(const std::string& path, const std::string& kind, uint32_t max_version,

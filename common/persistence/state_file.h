@@ -23,6 +23,12 @@ class StateFileError : public std::runtime_error {
 void WriteStateFile(const std::string& path, const std::string& kind, uint32_t version,
                     const google::protobuf::MessageLite& message);
 
+// The same for a service's periodic and shutdown saves: a failure (disk full, folder gone) is
+// logged, not thrown, and false returned so the caller keeps its state marked unsaved and tries
+// again at the next save.
+bool WriteStateFileOrLog(const std::string& path, const std::string& kind, uint32_t version,
+                         const google::protobuf::MessageLite& message);
+
 // Reads a file written by WriteStateFile into message. Refuses (throws StateFileError naming the
 // path and the reason) a missing file, wrong magic, another kind, a version newer than
 // max_version, a length or CRC mismatch, or a payload that does not parse. Returns the version.

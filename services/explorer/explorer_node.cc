@@ -360,10 +360,9 @@ class ExplorerNode::Controller {
       state.set_last_command_seq(command_seq_);
       dirty_ = false;
     }
-    try {
-      WriteStateFile(path, kStateKind, kStateVersion, state);
-    } catch (const std::exception& e) {
-      spdlog::error("could not save state: {}", e.what());
+    if (!WriteStateFileOrLog(path, kStateKind, kStateVersion, state)) {
+      std::lock_guard lock(mutex_);
+      dirty_ = true;  // try again at the next save
     }
   }
 

@@ -316,10 +316,9 @@ class PoseCellsNode::Processor {
       state.set_mean_vtrans_mps(mean_vtrans_mps_);
       dirty_ = false;
     }
-    try {
-      WriteStateFile(path, kStateKind, kStateVersion, state);
-    } catch (const std::exception& e) {
-      spdlog::error("could not save state: {}", e.what());
+    if (!WriteStateFileOrLog(path, kStateKind, kStateVersion, state)) {
+      std::lock_guard lock(mutex_);
+      dirty_ = true;  // try again at the next save
     }
   }
 

@@ -53,11 +53,12 @@ class PoseCellsServiceTest : public ::testing::Test {
     status_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
   }
 
-  std::unique_ptr<ServiceProcess> Start() {
-    auto process = std::make_unique<ServiceProcess>(
-        kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--state-dir",
-                                          state_dir_.path().string(), "--set", "service.heartbeat_period_s=0.2",
-                                          "--set", "pose_cells.resync_timeout_s=0"});
+  std::unique_ptr<ServiceProcess> Start(const std::vector<std::string>& extra_args = {}) {
+    std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--state-dir",
+                                  state_dir_.path().string(), "--set", "service.heartbeat_period_s=0.2",
+                                  "--set", "pose_cells.resync_timeout_s=0"};
+    args.insert(args.end(), extra_args.begin(), extra_args.end());
+    auto process = std::make_unique<ServiceProcess>(kBinary, args);
     const bool matched = WaitUntil(
         [&] {
           return velocity_pub_->MatchedSubscribers() > 0 && view_pub_->MatchedSubscribers() > 0 &&
@@ -196,6 +197,28 @@ TEST_F(PoseCellsServiceTest, SigtermSavesStateAndRestartContinuesTheActionSequen
     EXPECT_EQ(actions[i - 20].kind, KindOf(want.kind)) << "frame " << i;
     if (want.kind != pose_cells::Action::Kind::kNone) EXPECT_EQ(actions[i - 20].experience_id, want.experience_id);
   }
+}
+
+TEST_F(PoseCellsServiceTest, AFailedSaveIsTriedAgainAtTheNextSave) {
+  auto service = Start({"--set", "service.state_save_period_s=0.2"});
+  // A file where the state folder was: every save fails until the folder is back.
+  std::filesystem::remove_all(state_dir_.path());
+  std::ofstream(state_dir_.path()) << "not a folder";
+  const std::vector<ScriptedFrame> script = testing::ScriptedLoop(20);
+  for (const ScriptedFrame& f : script) {
+    velocity_pub_->Publish(f.velocity);
+    view_pub_->Publish(f.view);
+  }
+  ASSERT_EQ(AwaitActions(20).size(), 20u) << service->Output();
+  ASSERT_TRUE(WaitUntil([&] { return service->Output().find("could not save state") != std::string::npos; }, 10s))
+      << service->Output();
+  std::filesystem::remove(state_dir_.path());
+  std::filesystem::create_directories(state_dir_.path());
+  // No new input: only a retry of the failed save writes the file.
+  EXPECT_TRUE(WaitUntil([&] { return std::filesystem::exists(state_dir_.path() / "pose_cells.pb"); }, 10s))
+      << service->Output();
+  service->Signal(SIGTERM);
+  ASSERT_EQ(service->WaitExit(10s), std::optional<int>(0)) << service->Output();
 }
 
 TEST_F(PoseCellsServiceTest, CorruptStateFileIsRefusedAtStart) {
