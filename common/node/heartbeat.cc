@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <map>
+#include <set>
 
 namespace rslam {
 
@@ -33,10 +34,10 @@ void Heartbeat::Publish(const std::string& state) {
 std::vector<std::string> UnmatchedLinks(const std::vector<msg::ServiceStatus>& services) {
   std::map<std::string, uint32_t> writers, readers;  // topic -> services with a writer / reader of it
   for (const msg::ServiceStatus& s : services) {
-    std::map<std::string, bool> writes, reads;
-    for (const msg::EndpointMatch& e : s.endpoints) (e.writer ? writes : reads)[e.topic] = true;
-    for (const auto& [topic, _] : writes) ++writers[topic];
-    for (const auto& [topic, _] : reads) ++readers[topic];
+    std::set<std::string> writes, reads;
+    for (const msg::EndpointMatch& e : s.endpoints) (e.writer ? writes : reads).insert(e.topic);
+    for (const auto& topic : writes) ++writers[topic];
+    for (const auto& topic : reads) ++readers[topic];
   }
   std::vector<std::string> unmatched;
   for (const msg::ServiceStatus& s : services) {
