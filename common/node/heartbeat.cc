@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <map>
 #include <set>
 
@@ -50,6 +51,34 @@ std::vector<std::string> UnmatchedLinks(const std::vector<msg::ServiceStatus>& s
     }
   }
   return unmatched;
+}
+
+ServiceLinkWatch::ServiceLinkWatch(bus::Participant& participant)
+    : subscriber_(participant, bus::topics::kStatus, [this](const msg::ServiceStatus& status) {
+        std::lock_guard lock(mutex_);
+        latest_[status.service] = status;
+      }) {}
+
+std::vector<std::string> ServiceLinkWatch::Unmatched(const std::vector<std::string>& services,
+                                                     const std::vector<std::string>& written) const {
+  std::vector<std::string> missing;
+  std::vector<msg::ServiceStatus> latest;
+  {
+    std::lock_guard lock(mutex_);
+    for (const std::string& service : services)
+      if (latest_.count(service) == 0) missing.push_back("no heartbeat from " + service + " yet");
+    for (const auto& [name, status] : latest_) latest.push_back(status);
+  }
+  const std::vector<std::string> links = UnmatchedLinks(latest);
+  missing.insert(missing.end(), links.begin(), links.end());
+  for (const std::string& topic : written) {
+    const bool seen = std::any_of(latest.begin(), latest.end(), [&](const msg::ServiceStatus& s) {
+      return std::any_of(s.endpoints.begin(), s.endpoints.end(),
+                         [&](const msg::EndpointMatch& e) { return e.writer && e.topic == topic; });
+    });
+    if (!seen) missing.push_back("no service's heartbeat shows a writer of " + topic);
+  }
+  return missing;
 }
 
 }  // namespace rslam

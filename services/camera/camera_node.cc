@@ -11,8 +11,9 @@
 #include <stdexcept>
 #include <thread>
 
-#include "common/node/shutdown_signal.h"
 #include "common/node/frame_pacer.h"
+#include "common/node/heartbeat.h"
+#include "common/node/shutdown_signal.h"
 #include "services/camera/frame_preparation.h"
 #include "services/camera/frame_source.h"
 #include "services/camera/image_message.h"
@@ -145,14 +146,24 @@ class CameraNode::Impl {
     return stop_;
   }
 
+  // Recorded sources: before the first frame, wait for wait_for_readers readers of camera/image,
+  // for heartbeats from wait_for_services, and for the heartbeats to show every link among the
+  // services matched at both ends (a sample written before its reader matched is never
+  // delivered; across vendors discovery takes a second). Then start anyway, saying what is missing.
   void WaitForReaders() {
     if (live_ || config_.wait_for_readers <= 0) return;
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                             std::chrono::duration<double>(config_.wait_for_readers_timeout_s));
-    while (publisher_->MatchedSubscribers() < config_.wait_for_readers) {
+    const auto deadline = Clock::now() + Seconds(config_.wait_for_readers_timeout_s);
+    const ServiceLinkWatch links(context_.participant());
+    std::vector<std::string> missing;
+    const auto ready = [&] {
+      missing = links.Unmatched(config_.wait_for_services);
+      return publisher_->MatchedSubscribers() >= config_.wait_for_readers && missing.empty();
+    };
+    while (!ready()) {
       if (Clock::now() >= deadline) {
-        spdlog::warn("{} of {} readers after {} s; starting anyway", publisher_->MatchedSubscribers(),
-                     config_.wait_for_readers, config_.wait_for_readers_timeout_s);
+        spdlog::warn("{} of {} readers after {} s; starting anyway{}{}", publisher_->MatchedSubscribers(),
+                     config_.wait_for_readers, config_.wait_for_readers_timeout_s, missing.empty() ? "" : ": ",
+                     fmt::join(missing, "; "));
         return;
       }
       if (!SleepUntil(Clock::now() + std::chrono::milliseconds(20))) return;  // DDS has no wait on matching

@@ -55,6 +55,7 @@ struct CameraNodeConfig {
   double rate_hz = 0.0;                 // recorded sources: 0 = as fast as readers take frames
   int wait_for_readers = 1;             // recorded sources: readers to wait for before frame 0
   double wait_for_readers_timeout_s = 10.0;
+  std::vector<std::string> wait_for_services;  // recorded sources: heartbeats to hear before frame 0
   double ack_timeout_s = 10.0;          // rate_hz 0: longest wait for one frame's acknowledgments
   // rate_hz 0: per-frame outputs of the pipeline whose frame_seq paces the camera (common/node/frame_pacer.h).
   std::vector<std::string> lockstep_topics = {"odometry/velocity", "templates/view"};
@@ -80,7 +81,10 @@ struct CameraNodeConfig {
     v("start_stamp_ns", start_stamp_ns, "images: stamp of the first frame (ns)");
     v("rate_hz", rate_hz, "recorded sources: > 0 real-time rate; 0 = as fast as every reader acknowledges");
     v("wait_for_readers", wait_for_readers, "recorded sources: matched readers to wait for before the first frame");
-    v("wait_for_readers_timeout_s", wait_for_readers_timeout_s, "how long to wait for them (then start anyway)");
+    v("wait_for_services", wait_for_services,
+      "recorded sources: services (e.g. [odometry, templates, pose_cells]) whose heartbeats must show their links matched before the first frame");
+    v("wait_for_readers_timeout_s", wait_for_readers_timeout_s,
+      "how long to wait for them and for the services' heartbeats to show their links matched (then start anyway)");
     v("ack_timeout_s", ack_timeout_s, "rate_hz 0: longest wait for one frame's acknowledgments");
     v("lockstep_topics", lockstep_topics,
       "rate_hz 0: per-frame topics (odometry/velocity, templates/view, pose_cells/action, experience_map/pose, "

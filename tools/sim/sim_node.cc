@@ -2,14 +2,12 @@
 
 #include <spdlog/spdlog.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <stdexcept>
 
 #include "common/config/config_error.h"
-#include "common/node/heartbeat.h"
 #include "common/node/shutdown_signal.h"
 
 namespace rslam::sim {
@@ -67,6 +65,7 @@ SimNode::SimNode(ServiceContext& context, const Config& config)
           throw ConfigError("sim.start_pose", e.what());
         }
       }()),
+      links_(context.participant()),
       pacer_(static_cast<int>(config.lockstep_topics.size()), config.max_frames_in_flight,
              Seconds(config.lockstep_timeout_s), Seconds(config.startup_timeout_s)) {
   camera_pub_ = context_.Advertise(bus::topics::kSimCamera);
@@ -76,11 +75,6 @@ SimNode::SimNode(ServiceContext& context, const Config& config)
   command_sub_ = context_.Subscribe<msg::MotionCommand>(bus::topics::kExplorerCommand,
                                                         [this](const msg::MotionCommand& c) { OnCommand(c); });
   if (config_.rate_hz == 0) SubscribeLockstepTopics();
-  status_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(
-      context_.participant(), bus::topics::kStatus, [this](const msg::ServiceStatus& status) {
-        std::lock_guard lock(mutex_);
-        statuses_[status.service] = status;
-      });
   const Pose2D start = robot_.pose();
   spdlog::info("world {} ({}x{} cells of {} m), start ({:.2f}, {:.2f}, {:.2f}), {}", config_.sim.world_yaml,
                world_.width(), world_.height(), world_.resolution(), start.x, start.y, start.theta,
@@ -92,7 +86,6 @@ SimNode::SimNode(ServiceContext& context, const Config& config)
 SimNode::~SimNode() {
   // Subscriber callbacks use the mutex: end them before anything else goes.
   command_sub_.reset();
-  status_sub_.reset();
   lockstep_matched_.clear();
   lockstep_subs_.clear();
   {
@@ -104,21 +97,9 @@ SimNode::~SimNode() {
   spdlog::info("published {} frames", frames_published_.load());
 }
 
-std::vector<std::string> SimNode::UnlinkedServices() {
-  std::lock_guard lock(mutex_);
-  std::vector<msg::ServiceStatus> latest;
-  for (const auto& [name, status] : statuses_) latest.push_back(status);
-  std::vector<std::string> missing = UnmatchedLinks(latest);
-  if (config_.rate_hz == 0) {
-    for (const std::string& topic : config_.lockstep_topics) {
-      const bool written = std::any_of(latest.begin(), latest.end(), [&](const msg::ServiceStatus& s) {
-        return std::any_of(s.endpoints.begin(), s.endpoints.end(),
-                           [&](const msg::EndpointMatch& e) { return e.writer && e.topic == topic; });
-      });
-      if (!written) missing.push_back("no service's heartbeat shows a writer of " + topic);
-    }
-  }
-  return missing;
+std::vector<std::string> SimNode::UnlinkedServices() const {
+  return links_.Unmatched(config_.wait_for_services,
+                          config_.rate_hz == 0 ? config_.lockstep_topics : std::vector<std::string>{});
 }
 
 void SimNode::SubscribeLockstepTopics() {

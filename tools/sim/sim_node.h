@@ -18,7 +18,6 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
-#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -26,8 +25,8 @@
 #include <thread>
 #include <vector>
 
-#include "common/bus/subscriber.h"
 #include "common/node/frame_pacer.h"
+#include "common/node/heartbeat.h"
 #include "common/node/service_context.h"
 #include "tools/sim/sim_node_config.h"
 #include "tools/sim/simulated_robot.h"
@@ -71,7 +70,7 @@ class SimNode {
   void SubscribeLockstepTopics();
   // What the services' heartbeats show still unmatched among them (and, in lockstep, lockstep
   // topics no service writes yet); empty = a frame published now reaches every stage.
-  std::vector<std::string> UnlinkedServices();
+  std::vector<std::string> UnlinkedServices() const;
 
   ServiceContext& context_;
   const Config config_;
@@ -85,8 +84,7 @@ class SimNode {
   std::shared_ptr<void> command_sub_;
   std::vector<std::shared_ptr<void>> lockstep_subs_;
   std::vector<std::function<int()>> lockstep_matched_;  // matched publishers per lockstep topic
-  std::unique_ptr<bus::Subscriber<msg::ServiceStatus>> status_sub_;
-  std::map<std::string, msg::ServiceStatus> statuses_;  // latest heartbeat per service (mutex_)
+  ServiceLinkWatch links_;
 
   std::mutex mutex_;
   std::condition_variable wake_;

@@ -39,6 +39,7 @@ struct SimNodeConfig {
   // a publisher on every lockstep topic, and heartbeats showing the services in between matched
   // to each other. 0 = start at once.
   double wait_for_pipeline_s = 20.0;
+  std::vector<std::string> wait_for_services;  // heartbeats to hear first (`rslam demo`: all seven)
   // Frames to publish (0 = unlimited); then the process stops (exit 0).
   int64_t max_frames = 0;
 
@@ -55,6 +56,8 @@ struct SimNodeConfig {
     v("wait_for_pipeline_s", wait_for_pipeline_s,
       "before frame 0, wait up to this long for a sim/camera reader, the lockstep topics' publishers and "
       "the services' heartbeats showing them matched to each other");
+    v("wait_for_services", wait_for_services,
+      "services whose heartbeats must be heard (and show their links matched) before frame 0");
     v("max_frames", max_frames, "frames to publish, then stop (0 = unlimited)");
   }
 

@@ -114,6 +114,29 @@ TEST_F(CameraServiceTest, RateZeroInLockstepLosesNothingForAStageThatFallsBehind
   for (int i = 0; i < kFrames; ++i) EXPECT_EQ(seqs[i], static_cast<uint64_t>(i));
 }
 
+TEST_F(CameraServiceTest, TheFirstFrameWaitsForTheNamedServicesHeartbeatsOrSaysWhatIsMissing) {
+  WriteImages(2);
+  bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
+  {
+    // Nobody named `ping` runs yet: the camera waits out its timeout, then starts and says why.
+    ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0",
+                                         "wait_for_services=[ping]", "wait_for_readers_timeout_s=1"}));
+    ASSERT_TRUE(frames.TakeOne(10s)) << camera.Output();
+    EXPECT_NE(camera.Output().find("starting anyway: no heartbeat from ping yet"), std::string::npos)
+        << camera.Output();
+    EXPECT_EQ(camera.WaitExit(10s), 0) << camera.Output();
+  }
+  while (frames.TakeOne(100ms)) {
+  }
+  // `rslam ping` heartbeats as service `ping`: the camera starts once it is heard and linked.
+  ServiceProcess ping(RSLAM_BINARY_DIR "/bin/rslam", {"ping", "--domain", std::to_string(domain_.id()), "--seconds", "30"});
+  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0",
+                                       "wait_for_services=[ping]", "wait_for_readers_timeout_s=20"}));
+  ASSERT_TRUE(frames.TakeOne(20s)) << camera.Output() << ping.Output();
+  EXPECT_EQ(camera.WaitExit(10s), 0) << camera.Output();
+  EXPECT_EQ(camera.Output().find("starting anyway"), std::string::npos) << camera.Output();
+}
+
 TEST_F(CameraServiceTest, UnreadableImageIsSkippedAndCountedAndItsNumberStaysUnused) {
   WriteImages(4);
   {

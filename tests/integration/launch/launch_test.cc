@@ -13,6 +13,7 @@
 
 #include "common/bus/participant.h"
 #include "common/bus/subscriber.h"
+#include "common/node/heartbeat.h"
 #include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
@@ -88,6 +89,13 @@ TEST_F(LaunchTest, RestartsAKilledServiceAndStopsEverythingOnSigterm) {
   const pid_t map_pid = static_cast<pid_t>(Latest("experience_map")->pid);
   // Nothing publishes odometry on this domain: the pose cells' reader of it is unmatched.
   EXPECT_FALSE(Matched(*Latest("pose_cells"), "odometry/velocity", false));
+  // What a frame source waiting for the pipeline sees.
+  const ServiceLinkWatch links(*participant_);
+  EXPECT_TRUE(testing::WaitFor([&] { return links.Unmatched({"pose_cells", "experience_map"}).empty(); }, 10s))
+      << ::testing::PrintToString(links.Unmatched({"pose_cells", "experience_map"}));
+  EXPECT_EQ(links.Unmatched({"odometry"}), std::vector<std::string>{"no heartbeat from odometry yet"});
+  EXPECT_EQ(links.Unmatched({}, {"odometry/velocity"}),
+            std::vector<std::string>{"no service's heartbeat shows a writer of odometry/velocity"});
 
   ASSERT_EQ(::kill(first_pid, SIGKILL), 0);
   ASSERT_TRUE(testing::WaitFor(

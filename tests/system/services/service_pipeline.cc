@@ -64,17 +64,11 @@ ServicePipeline::ServicePipeline(int domain, PipelineOptions options) : domain_(
 // is never delivered (the first frames' odometry would be lost). The camera starts once the
 // heartbeats show every link among the services matched at both ends.
 void ServicePipeline::AwaitDiscovery() {
+  const ServiceLinkWatch links(*participant_);
   std::vector<std::string> unmatched;
-  const bool ready = testing::WaitFor(
-      [&] {
-        std::lock_guard lock(mutex_);
-        std::vector<msg::ServiceStatus> latest;
-        for (const auto& [name, status] : statuses_) latest.push_back(status);
-        unmatched = UnmatchedLinks(latest);
-        return unmatched.empty();
-      },
-      options_.startup_timeout);
-  if (ready) return;
+  const std::vector<std::string> services = {"odometry", "templates", "pose_cells", "experience_map"};
+  if (testing::WaitFor([&] { return (unmatched = links.Unmatched(services)).empty(); }, options_.startup_timeout))
+    return;
   std::string list;
   for (const auto& u : unmatched) list += u + "\n";
   throw std::runtime_error("discovery never matched:\n" + list + Logs());
