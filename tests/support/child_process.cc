@@ -151,10 +151,23 @@ std::string ChildProcess::Output() const {
   return text.str();
 }
 
+bool ChildProcess::WaitForOutput(const std::string& text, std::chrono::milliseconds timeout) {
+  bool found = false;
+  WaitFor([&] { return (found = Output().find(text) != std::string::npos) || !Running(); }, timeout);
+  return found || Output().find(text) != std::string::npos;
+}
+
 std::string ChildProcess::Tail(std::size_t max_chars) const {
   std::string text = Output();
   if (text.size() > max_chars) text = "..." + text.substr(text.size() - max_chars);
   return "--- " + name_ + " (pid " + std::to_string(pid_) + ") ---\n" + text + "\n";
+}
+
+std::pair<int, std::string> RunToExit(const std::string& binary, const std::vector<std::string>& args,
+                                      std::chrono::milliseconds timeout) {
+  ChildProcess process(binary, args);
+  const std::optional<int> code = process.WaitExit(timeout);
+  return {code.value_or(-1), process.Output()};
 }
 
 }  // namespace rslam::testing

@@ -18,6 +18,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rslam::testing {
@@ -69,6 +70,8 @@ class ChildProcess {
 
   // Everything the child wrote so far.
   std::string Output() const;
+  // Waits until the output contains text; false at the timeout or once the child ended without it.
+  bool WaitForOutput(const std::string& text, std::chrono::milliseconds timeout);
   // "--- name (pid N) ---\n<the last max_chars of Output()>" for failure messages.
   std::string Tail(std::size_t max_chars = 4000) const;
 
@@ -81,5 +84,9 @@ class ChildProcess {
   pid_t pid_ = -1;
   std::optional<int> status_;
 };
+
+// Runs binary with args to its end (or the timeout); returns {exit code (-1 at the timeout), output}.
+std::pair<int, std::string> RunToExit(const std::string& binary, const std::vector<std::string>& args,
+                                      std::chrono::milliseconds timeout = std::chrono::seconds(15));
 
 }  // namespace rslam::testing

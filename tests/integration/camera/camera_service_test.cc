@@ -19,16 +19,16 @@
 #include "common/bus/subscriber.h"
 #include "services/occupancy/camera_model.h"
 #include "tests/integration/camera/image_test_util.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
 namespace rslam {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::ServiceProcess;
-using testing::TempDir;
-using testing::WaitUntil;
+using testing::ChildProcess;
+using testing::ScratchFolder;
+using testing::WaitFor;
 
 const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-camera";
 
@@ -64,14 +64,14 @@ class CameraServiceTest : public ::testing::Test {
   }
 
   testing::TestDomain domain_;
-  TempDir images_;
+  ScratchFolder images_;
   std::unique_ptr<bus::Participant> participant_;
 };
 
 TEST_F(CameraServiceTest, ImageFolderFramesArriveInOrderWithDeterministicStampsThenTheServiceExits) {
   const std::vector<cv::Mat> images = WriteImages(6);
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
-  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "fps=5",
+  ChildProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "fps=5",
                                        "start_stamp_ns=1000000000", "rate_hz=0", "wait_for_readers=1"}));
   for (int i = 0; i < 6; ++i) {
     const auto frame = frames.TakeOne(10s);
@@ -95,7 +95,7 @@ TEST_F(CameraServiceTest, RateZeroInLockstepLosesNothingForAStageThatFallsBehind
   // The test is a pipeline stage: it takes frames slowly and reports each on odometry/velocity.
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
   bus::Publisher<msg::Velocity> done(*participant_, bus::topics::kOdometryVelocity);
-  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0",
+  ChildProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0",
                                        "lockstep_topics=[odometry/velocity]", "max_frames_in_flight=4"}));
   ASSERT_TRUE(frames.WaitForPublishers(1, 10s)) << camera.Output();
   ASSERT_TRUE(done.WaitForSubscribers(1, 10s)) << camera.Output();
@@ -119,7 +119,7 @@ TEST_F(CameraServiceTest, TheFirstFrameWaitsForTheNamedServicesHeartbeatsOrSaysW
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
   {
     // Nobody named `ping` runs yet: the camera waits out its timeout, then starts and says why.
-    ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0",
+    ChildProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0",
                                          "wait_for_services=[ping]", "wait_for_readers_timeout_s=1"}));
     ASSERT_TRUE(frames.TakeOne(10s)) << camera.Output();
     EXPECT_NE(camera.Output().find("starting anyway: no heartbeat from ping yet"), std::string::npos)
@@ -129,8 +129,8 @@ TEST_F(CameraServiceTest, TheFirstFrameWaitsForTheNamedServicesHeartbeatsOrSaysW
   while (frames.TakeOne(100ms)) {
   }
   // `rslam ping` heartbeats as service `ping`: the camera starts once it is heard and linked.
-  ServiceProcess ping(RSLAM_BINARY_DIR "/bin/rslam", {"ping", "--domain", std::to_string(domain_.id()), "--seconds", "30"});
-  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0",
+  ChildProcess ping(RSLAM_BINARY_DIR "/bin/rslam", {"ping", "--domain", std::to_string(domain_.id()), "--seconds", "30"});
+  ChildProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "rate_hz=0",
                                        "wait_for_services=[ping]", "wait_for_readers_timeout_s=20"}));
   ASSERT_TRUE(frames.TakeOne(20s)) << camera.Output() << ping.Output();
   EXPECT_EQ(camera.WaitExit(10s), 0) << camera.Output();
@@ -145,7 +145,7 @@ TEST_F(CameraServiceTest, UnreadableImageIsSkippedAndCountedAndItsNumberStaysUnu
   }
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
   bus::Subscriber<msg::ServiceStatus> heartbeats(*participant_, bus::topics::kStatus);
-  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "fps=10"}));
+  ChildProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "fps=10"}));
   for (const uint64_t expected : {0u, 1u, 3u}) {
     const auto frame = frames.TakeOne(10s);
     ASSERT_TRUE(frame) << camera.Output();
@@ -161,7 +161,7 @@ TEST_F(CameraServiceTest, UnreadableImageIsSkippedAndCountedAndItsNumberStaysUnu
 TEST_F(CameraServiceTest, LoopContinuesFrameNumbersAndStampsUpwards) {
   const std::vector<cv::Mat> images = WriteImages(3);
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
-  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "fps=10", "loop=true",
+  ChildProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "fps=10", "loop=true",
                                        "rate_hz=50"}));
   for (int i = 0; i < 8; ++i) {
     const auto frame = frames.TakeOne(10s);
@@ -181,7 +181,7 @@ TEST_F(CameraServiceTest, VideoFileFramesArriveInOrderWithIncreasingStamps) {
     for (int i = 0; i < 5; ++i) writer.write(testing::RandomTexture(64, 48, 3, 50 + i));
   }
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
-  ServiceProcess camera(kBinary, Args({"source=video", "path=" + video}));
+  ChildProcess camera(kBinary, Args({"source=video", "path=" + video}));
   int64_t previous_stamp = -1;
   for (int i = 0; i < 5; ++i) {
     const auto frame = frames.TakeOne(10s);
@@ -197,7 +197,7 @@ TEST_F(CameraServiceTest, VideoFileFramesArriveInOrderWithIncreasingStamps) {
 TEST_F(CameraServiceTest, CropAndGreyAreApplied) {
   const std::vector<cv::Mat> images = WriteImages(2);
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
-  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "crop.x=8", "crop.y=4",
+  ChildProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "crop.x=8", "crop.y=4",
                                        "crop.width=20", "crop.height=10", "grey=true"}));
   const auto frame = frames.TakeOne(10s);
   ASSERT_TRUE(frame) << camera.Output();
@@ -220,7 +220,7 @@ TEST_F(CameraServiceTest, AntiVignettingAndUndistortionMatchTheOccupancyCameraMo
   model.k1 = -0.2;
   model.vignetting_gains = {0.3, 0.2, 0.1};
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
-  ServiceProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "anti_vignetting=true",
+  ChildProcess camera(kBinary, Args({"source=images", "path=" + images_.path().string(), "anti_vignetting=true",
                                        "undistort=true", "model.width=64", "model.height=48", "model.fx=50",
                                        "model.fy=50", "model.cx=31.5", "model.cy=23.5", "model.k1=-0.2",
                                        "model.vignetting_gains=[0.3, 0.2, 0.1]"}));
@@ -242,7 +242,7 @@ TEST_F(CameraServiceTest, CropOutsideTheImageIsAConfigErrorNamingCrop) {
 TEST_F(CameraServiceTest, SimSourceRepublishesSimulatorFramesWithTheirSeqAndStamp) {
   bus::Publisher<msg::Image> sim(*participant_, bus::topics::kSimCamera);
   bus::Subscriber<msg::Image> frames(*participant_, bus::topics::kCameraImage);
-  ServiceProcess camera(kBinary, Args({"source=sim"}));
+  ChildProcess camera(kBinary, Args({"source=sim"}));
   ASSERT_TRUE(sim.WaitForSubscribers(1, 10s)) << camera.Output();
   ASSERT_TRUE(frames.WaitForPublishers(1, 10s)) << camera.Output();
   for (uint64_t seq = 100; seq < 104; ++seq) {

@@ -14,14 +14,14 @@
 #include "common/bus/participant.h"
 #include "common/bus/subscriber.h"
 #include "services/camera/frame_source.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
 namespace rslam {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::ServiceProcess;
+using testing::ChildProcess;
 
 const std::string kBin = RSLAM_BINARY_DIR "/bin/";
 const std::string kPreset = RSLAM_SOURCE_DIR "/deploy/presets/irat.yaml";
@@ -41,8 +41,8 @@ TEST(IratPipelineTest, EveryFrameGetsOneVelocityAndOneViewInOrder) {
   bus::Subscriber<msg::ViewTemplate> views(*participant, bus::topics::kTemplatesView);
   const std::vector<std::string> common{"--domain", std::to_string(domain.id()), "--config", kPreset};
 
-  ServiceProcess odometry(kBin + "rslam-odometry", common);
-  ServiceProcess templates(kBin + "rslam-templates", common);
+  ChildProcess odometry(kBin + "rslam-odometry", common);
+  ChildProcess templates(kBin + "rslam-templates", common);
   ASSERT_TRUE(velocities.WaitForPublishers(1, 10s)) << odometry.Output();
   ASSERT_TRUE(views.WaitForPublishers(1, 10s)) << templates.Output();
   std::vector<std::string> camera_args = common;
@@ -52,7 +52,7 @@ TEST(IratPipelineTest, EveryFrameGetsOneVelocityAndOneViewInOrder) {
   }
   camera_args.push_back("--set");
   camera_args.push_back("camera.path=" + folder);
-  ServiceProcess camera(kBin + "rslam-camera", camera_args);
+  ChildProcess camera(kBin + "rslam-camera", camera_args);
 
   uint32_t templates_seen = 0;
   for (std::size_t i = 0; i < frames; ++i) {

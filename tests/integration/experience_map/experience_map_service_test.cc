@@ -16,7 +16,7 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/integration/pose_cells/scripted_actions.h"
 #include "tests/support/test_domain.h"
 
@@ -24,9 +24,9 @@ namespace rslam {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::ServiceProcess;
-using testing::TempDir;
-using testing::WaitUntil;
+using testing::ChildProcess;
+using testing::ScratchFolder;
+using testing::WaitFor;
 
 const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-experience-map";
 
@@ -57,12 +57,12 @@ class ExperienceMapServiceTest : public ::testing::Test {
     status_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
   }
 
-  std::unique_ptr<ServiceProcess> Start(std::vector<std::string> extra = {}) {
+  std::unique_ptr<ChildProcess> Start(std::vector<std::string> extra = {}) {
     std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--state-dir", state_dir_.path().string(),
                                   "--set", "service.heartbeat_period_s=0.2"};
     args.insert(args.end(), extra.begin(), extra.end());
-    auto process = std::make_unique<ServiceProcess>(kBinary, args);
-    const bool matched = WaitUntil(
+    auto process = std::make_unique<ChildProcess>(kBinary, args);
+    const bool matched = WaitFor(
         [&] { return pose_sub_->MatchedPublishers() > 0 && map_sub_->MatchedPublishers() > 0; }, 10s);
     EXPECT_TRUE(matched) << process->Output();
     return process;
@@ -97,7 +97,7 @@ class ExperienceMapServiceTest : public ::testing::Test {
   }
 
   testing::TestDomain domain_;
-  TempDir state_dir_;
+  ScratchFolder state_dir_;
   std::unique_ptr<bus::Participant> participant_;
   std::unique_ptr<bus::Publisher<msg::PoseCellAction>> action_pub_;
   std::unique_ptr<bus::Subscriber<msg::ExperiencePose>> pose_sub_;
@@ -198,8 +198,8 @@ TEST_F(ExperienceMapServiceTest, SavedMapFileLoadsIntoANewServiceAndItsSnapshot)
     ASSERT_EQ(service->WaitExit(10s), std::optional<int>(0)) << service->Output();
   }
   ASSERT_TRUE(std::filesystem::exists(map_file));
-  TempDir other_state;
-  auto loaded = std::make_unique<ServiceProcess>(
+  ScratchFolder other_state;
+  auto loaded = std::make_unique<ChildProcess>(
       kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--state-dir",
                                         other_state.path().string(), "--set", "experience_map.load_map=" + map_file});
   const auto map = AwaitMap([&](const msg::ExperienceMap& m) {

@@ -19,7 +19,7 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/integration/pose_cells/scripted_actions.h"
 #include "tests/support/test_domain.h"
 
@@ -27,9 +27,9 @@ namespace rslam {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::ServiceProcess;
-using testing::TempDir;
-using testing::WaitUntil;
+using testing::ChildProcess;
+using testing::ScratchFolder;
+using testing::WaitFor;
 
 const std::string kPoseCells = RSLAM_BINARY_DIR "/bin/rslam-pose-cells";
 const std::string kExperienceMap = RSLAM_BINARY_DIR "/bin/rslam-experience-map";
@@ -72,13 +72,13 @@ class BackendRestartTest : public ::testing::Test {
             "--set", "service.heartbeat_period_s=0.1", "--set", "service.state_save_period_s=0.1"};
   }
 
-  std::unique_ptr<ServiceProcess> StartPoseCells(double resync_timeout_s) {
+  std::unique_ptr<ChildProcess> StartPoseCells(double resync_timeout_s) {
     auto args = CommonArgs();
     args.insert(args.end(), {"--set", "pose_cells.resync_timeout_s=" + std::to_string(resync_timeout_s)});
     pose_cells_status_seen_ = false;
-    auto p = std::make_unique<ServiceProcess>(kPoseCells, args);
+    auto p = std::make_unique<ChildProcess>(kPoseCells, args);
     // Its heartbeat comes after its subscriptions exist and its resynchronisation is done.
-    EXPECT_TRUE(WaitUntil([&] { return pose_cells_status_seen_.load() && velocity_pub_->MatchedSubscribers() > 0 &&
+    EXPECT_TRUE(WaitFor([&] { return pose_cells_status_seen_.load() && velocity_pub_->MatchedSubscribers() > 0 &&
                                        view_pub_->MatchedSubscribers() > 0; },
                           15s))
         << "status seen " << pose_cells_status_seen_ << ", odometry readers " << velocity_pub_->MatchedSubscribers()
@@ -87,10 +87,10 @@ class BackendRestartTest : public ::testing::Test {
     return p;
   }
 
-  std::unique_ptr<ServiceProcess> StartExperienceMap() {
+  std::unique_ptr<ChildProcess> StartExperienceMap() {
     map_status_seen_ = false;
-    auto p = std::make_unique<ServiceProcess>(kExperienceMap, CommonArgs());
-    EXPECT_TRUE(WaitUntil([&] { return map_status_seen_.load() && map_sub_->MatchedPublishers() > 0; }, 15s))
+    auto p = std::make_unique<ChildProcess>(kExperienceMap, CommonArgs());
+    EXPECT_TRUE(WaitFor([&] { return map_status_seen_.load() && map_sub_->MatchedPublishers() > 0; }, 15s))
         << p->Output();
     return p;
   }
@@ -124,7 +124,7 @@ class BackendRestartTest : public ::testing::Test {
   std::optional<msg::ExperienceMap> AwaitFinalMap() {
     // Actions stop coming once the pose cells have processed the last frame.
     int64_t seen = -1;
-    WaitUntil(
+    WaitFor(
         [&] {
           const int64_t now = last_action_seq_;
           const bool quiet = now == seen;
@@ -141,7 +141,7 @@ class BackendRestartTest : public ::testing::Test {
   }
 
   testing::TestDomain domain_;
-  TempDir state_dir_;
+  ScratchFolder state_dir_;
   const std::vector<testing::ScriptedFrame> script_;
   std::unique_ptr<bus::Participant> participant_;
   std::unique_ptr<bus::Publisher<msg::Velocity>> velocity_pub_;
@@ -164,7 +164,7 @@ TEST_F(BackendRestartTest, ExperienceMapRestartAfterSigkillEndsWithTheUninterrup
   auto pose_cells = StartPoseCells(0.3);
   StartDrive(10ms);
   const auto state_file = state_dir_.path() / "experience_map.pb";
-  ASSERT_TRUE(WaitUntil([&] { return published_ >= kKillMapAtFrame && std::filesystem::exists(state_file); }, 15s));
+  ASSERT_TRUE(WaitFor([&] { return published_ >= kKillMapAtFrame && std::filesystem::exists(state_file); }, 15s));
   map->Signal(SIGKILL);
   ASSERT_TRUE(map->WaitExit(5s));
   map = StartExperienceMap();  // reloads its state; the missed actions come from the pose cells' log
@@ -200,7 +200,7 @@ TEST_F(BackendRestartTest, PoseCellsRestartAfterSigkillResyncsFromTheMapWithoutI
   // experiences) stay a small part of the drive.
   StartDrive(20ms);
   const auto state_file = state_dir_.path() / "pose_cells.pb";
-  ASSERT_TRUE(WaitUntil([&] { return published_ >= kKillPoseCellsAtFrame && std::filesystem::exists(state_file); }, 15s));
+  ASSERT_TRUE(WaitFor([&] { return published_ >= kKillPoseCellsAtFrame && std::filesystem::exists(state_file); }, 15s));
   pose_cells->Signal(SIGKILL);
   ASSERT_TRUE(pose_cells->WaitExit(5s));
   const int64_t seq_at_kill = last_action_seq_;

@@ -13,16 +13,16 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
 namespace rslam {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::ServiceProcess;
-using testing::TempDir;
-using testing::WaitUntil;
+using testing::ChildProcess;
+using testing::ScratchFolder;
+using testing::WaitFor;
 
 const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-explorer";
 
@@ -82,15 +82,15 @@ class ExplorerServiceTest : public ::testing::Test {
     heartbeat_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
   }
 
-  std::unique_ptr<ServiceProcess> Start(const std::vector<std::string>& extra = {}) {
+  std::unique_ptr<ChildProcess> Start(const std::vector<std::string>& extra = {}) {
     std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--state-dir", state_dir_.path().string(),
                                   "--set", "service.heartbeat_period_s=0.2", "--set",
                                   "explorer.fresh_grid_timeout_s=0.3"};
     args.insert(args.end(), extra.begin(), extra.end());
     const int poses = pose_pub_->MatchedSubscribers(), feedback = feedback_pub_->MatchedSubscribers();
     const int commands = command_sub_->MatchedPublishers();
-    auto process = std::make_unique<ServiceProcess>(kBinary, args);
-    const bool matched = WaitUntil(
+    auto process = std::make_unique<ChildProcess>(kBinary, args);
+    const bool matched = WaitFor(
         [&] {
           return pose_pub_->MatchedSubscribers() > poses && feedback_pub_->MatchedSubscribers() > feedback &&
                  command_sub_->MatchedPublishers() > commands;
@@ -122,7 +122,7 @@ class ExplorerServiceTest : public ::testing::Test {
   }
 
   testing::TestDomain domain_;
-  TempDir state_dir_;
+  ScratchFolder state_dir_;
   std::unique_ptr<bus::Participant> participant_;
   std::unique_ptr<bus::Publisher<msg::OccupancyGrid>> grid_pub_;
   std::unique_ptr<bus::Publisher<msg::ExperiencePose>> pose_pub_;
@@ -221,7 +221,7 @@ TEST_F(ExplorerServiceTest, LooksBeforeMovingAndDoesNotDriveIntoANewWall) {
   // While the robot turns, the map learns of a wall across the corridor.
   grid_pub_->Publish(Corridor(/*closed_ahead=*/true));
   // Its inputs so far: the pose, the first grid and this one (the heartbeat counts them).
-  ASSERT_TRUE(WaitUntil(
+  ASSERT_TRUE(WaitFor(
       [&] {
         const auto s = heartbeat_sub_->TakeOne(100ms);
         return s && s->service == "explorer" && s->messages_in >= 3;

@@ -20,15 +20,15 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
 namespace rslam {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::ServiceProcess;
-using testing::TempDir;
+using testing::ChildProcess;
+using testing::ScratchFolder;
 
 constexpr double kResolution = 0.05;
 constexpr int kWidth = 60;   // 3 m
@@ -52,7 +52,7 @@ std::string WriteRoom(const std::filesystem::path& dir) {
 
 TEST(ExplorerSimLoopTest, ExploresASimulatedRoomToCompletion) {
   testing::TestDomain domain;
-  TempDir dir;
+  ScratchFolder dir;
   const std::string world = WriteRoom(dir.path());
   const auto config = dir.path() / "demo.yaml";
   {
@@ -92,11 +92,11 @@ TEST(ExplorerSimLoopTest, ExploresASimulatedRoomToCompletion) {
   const std::vector<std::string> common{"--config", config.string(), "--domain", std::to_string(domain.id()),
                                         "--fresh"};
   const std::string bin = RSLAM_BINARY_DIR "/bin/";
-  ServiceProcess occupancy(bin + "rslam-occupancy", common);
-  ServiceProcess explorer(bin + "rslam-explorer", common);
-  ASSERT_TRUE(testing::WaitUntil([&] { return image_pub.MatchedSubscribers() >= 1 && pose_pub.MatchedSubscribers() >= 2; },
+  ChildProcess occupancy(bin + "rslam-occupancy", common);
+  ChildProcess explorer(bin + "rslam-explorer", common);
+  ASSERT_TRUE(testing::WaitFor([&] { return image_pub.MatchedSubscribers() >= 1 && pose_pub.MatchedSubscribers() >= 2; },
                                  10s));
-  ServiceProcess sim(bin + "rslam-sim", common);
+  ChildProcess sim(bin + "rslam-sim", common);
 
   std::optional<msg::ExplorerStatus> last;
   const auto deadline = std::chrono::steady_clock::now() + 60s;

@@ -16,7 +16,7 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 #include <opencv2/imgproc.hpp>
 
@@ -27,9 +27,9 @@ namespace rslam {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::ServiceProcess;
-using testing::TempDir;
-using testing::WaitUntil;
+using testing::ChildProcess;
+using testing::ScratchFolder;
+using testing::WaitFor;
 
 const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-occupancy";
 constexpr double kWallX = 1.0;  // the wall's face, metres ahead of the robot at the origin
@@ -72,7 +72,7 @@ class OccupancyServiceTest : public ::testing::Test {
     status_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
   }
 
-  std::unique_ptr<ServiceProcess> Start(const std::vector<std::string>& extra = {}) {
+  std::unique_ptr<ChildProcess> Start(const std::vector<std::string>& extra = {}) {
     std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--state-dir", state_dir_.path().string(),
                                   "--set", "service.heartbeat_period_s=0.2", "--set",
                                   "service.state_save_period_s=0.3"};
@@ -80,9 +80,9 @@ class OccupancyServiceTest : public ::testing::Test {
     // A killed predecessor stays matched until its lease expires: count the new process on top.
     const int images = image_pub_->MatchedSubscribers(), poses = pose_pub_->MatchedSubscribers();
     const int profiles = profile_sub_->MatchedPublishers(), grids = grid_sub_->MatchedPublishers();
-    auto process = std::make_unique<ServiceProcess>(kBinary, args);
+    auto process = std::make_unique<ChildProcess>(kBinary, args);
     // Up when its publishers and subscribers have matched ours.
-    const bool matched = WaitUntil(
+    const bool matched = WaitFor(
         [&] {
           return image_pub_->MatchedSubscribers() > images && pose_pub_->MatchedSubscribers() > poses &&
                  profile_sub_->MatchedPublishers() > profiles && grid_sub_->MatchedPublishers() > grids;
@@ -162,7 +162,7 @@ class OccupancyServiceTest : public ::testing::Test {
   }
 
   testing::TestDomain domain_;
-  TempDir state_dir_;
+  ScratchFolder state_dir_;
   sim::WorldMap world_;
   sim::CameraRenderer renderer_;
   std::unique_ptr<bus::Participant> participant_;
@@ -275,7 +275,7 @@ TEST_F(OccupancyServiceTest, AcceptsMonoImages) {
   pose_pub_->Publish(Pose(1, 0, 0, 0));
   image_pub_->Publish(image);
   std::optional<msg::ObstacleProfile> profile;
-  ASSERT_TRUE(WaitUntil(
+  ASSERT_TRUE(WaitFor(
       [&] {
         profile = profile_sub_->TakeOne(100ms);
         return profile.has_value();
@@ -340,7 +340,7 @@ TEST_F(OccupancyServiceTest, RestartAfterSigkillReloadsTheLastSavedStateAndConti
     for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
     const auto after_frames = std::filesystem::file_time_type::clock::now();
     // A periodic save made after the last frame (every 0.3 s here).
-    ASSERT_TRUE(WaitUntil(
+    ASSERT_TRUE(WaitFor(
         [&] {
           std::error_code ec;
           return std::filesystem::exists(state_file) && std::filesystem::last_write_time(state_file, ec) > after_frames;

@@ -12,14 +12,14 @@
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
 #include "tests/integration/camera/image_test_util.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
 namespace rslam {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::ServiceProcess;
+using testing::ChildProcess;
 
 const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-odometry";
 constexpr int kWidth = 160;
@@ -39,7 +39,7 @@ class OdometryServiceTest : public ::testing::Test {
   }
 
   // Whole-image crops for both profiles, a 60 degree lens, no speed noise floor.
-  std::unique_ptr<ServiceProcess> Start(std::vector<std::string> extra = {}) {
+  std::unique_ptr<ChildProcess> Start(std::vector<std::string> extra = {}) {
     std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--set", "service.heartbeat_period_s=0.2"};
     std::vector<std::string> keys{"vtrans_image_x_min=0", "vtrans_image_x_max=-1", "vtrans_image_y_min=0",
                                   "vtrans_image_y_max=-1", "vrot_image_x_min=0",   "vrot_image_x_max=-1",
@@ -50,7 +50,7 @@ class OdometryServiceTest : public ::testing::Test {
       args.push_back("--set");
       args.push_back("odometry." + k);
     }
-    auto process = std::make_unique<ServiceProcess>(kBinary, args);
+    auto process = std::make_unique<ChildProcess>(kBinary, args);
     EXPECT_TRUE(images_->WaitForSubscribers(1, 10s)) << process->Output();
     EXPECT_TRUE(velocities_->WaitForPublishers(1, 10s)) << process->Output();
     return process;
@@ -177,7 +177,7 @@ TEST_F(OdometryServiceTest, FrameZeroAfterARestartedCameraStartsANewRun) {
 }
 
 TEST_F(OdometryServiceTest, WheelOdometryIsRepublishedWithItsHeader) {
-  auto process = std::make_unique<ServiceProcess>(
+  auto process = std::make_unique<ChildProcess>(
       kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--set",
                                         "odometry.use_wheel_odometry=true"});
   ASSERT_TRUE(wheel_->WaitForSubscribers(1, 10s)) << process->Output();

@@ -15,7 +15,7 @@
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
 #include "services/pose_cells/pose_cell_network.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/integration/pose_cells/scripted_loop.h"
 #include "tests/support/test_domain.h"
 
@@ -24,9 +24,9 @@ namespace {
 
 using namespace std::chrono_literals;
 using testing::ScriptedFrame;
-using testing::ServiceProcess;
-using testing::TempDir;
-using testing::WaitUntil;
+using testing::ChildProcess;
+using testing::ScratchFolder;
+using testing::WaitFor;
 
 const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-pose-cells";
 
@@ -53,13 +53,13 @@ class PoseCellsServiceTest : public ::testing::Test {
     status_sub_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(*participant_, bus::topics::kStatus);
   }
 
-  std::unique_ptr<ServiceProcess> Start(const std::vector<std::string>& extra_args = {}) {
+  std::unique_ptr<ChildProcess> Start(const std::vector<std::string>& extra_args = {}) {
     std::vector<std::string> args{"--domain", std::to_string(domain_.id()), "--state-dir",
                                   state_dir_.path().string(), "--set", "service.heartbeat_period_s=0.2",
                                   "--set", "pose_cells.resync_timeout_s=0"};
     args.insert(args.end(), extra_args.begin(), extra_args.end());
-    auto process = std::make_unique<ServiceProcess>(kBinary, args);
-    const bool matched = WaitUntil(
+    auto process = std::make_unique<ChildProcess>(kBinary, args);
+    const bool matched = WaitFor(
         [&] {
           return velocity_pub_->MatchedSubscribers() > 0 && view_pub_->MatchedSubscribers() > 0 &&
                  action_sub_->MatchedPublishers() > 0;
@@ -88,7 +88,7 @@ class PoseCellsServiceTest : public ::testing::Test {
   }
 
   testing::TestDomain domain_;
-  TempDir state_dir_;
+  ScratchFolder state_dir_;
   std::unique_ptr<bus::Participant> participant_;
   std::unique_ptr<bus::Publisher<msg::Velocity>> velocity_pub_;
   std::unique_ptr<bus::Publisher<msg::ViewTemplate>> view_pub_;
@@ -210,12 +210,12 @@ TEST_F(PoseCellsServiceTest, AFailedSaveIsTriedAgainAtTheNextSave) {
     view_pub_->Publish(f.view);
   }
   ASSERT_EQ(AwaitActions(20).size(), 20u) << service->Output();
-  ASSERT_TRUE(WaitUntil([&] { return service->Output().find("could not save state") != std::string::npos; }, 10s))
+  ASSERT_TRUE(WaitFor([&] { return service->Output().find("could not save state") != std::string::npos; }, 10s))
       << service->Output();
   std::filesystem::remove(state_dir_.path());
   std::filesystem::create_directories(state_dir_.path());
   // No new input: only a retry of the failed save writes the file.
-  EXPECT_TRUE(WaitUntil([&] { return std::filesystem::exists(state_dir_.path() / "pose_cells.pb"); }, 10s))
+  EXPECT_TRUE(WaitFor([&] { return std::filesystem::exists(state_dir_.path() / "pose_cells.pb"); }, 10s))
       << service->Output();
   service->Signal(SIGTERM);
   ASSERT_EQ(service->WaitExit(10s), std::optional<int>(0)) << service->Output();

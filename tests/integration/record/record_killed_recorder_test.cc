@@ -58,10 +58,9 @@ TEST(KilledRecorder, RecoverKeepsEveryMessageOfTheCompleteChunks) {
   const auto dir = ScratchDir();
   const std::string file = (dir / "killed.mcap").string();
   const std::string repaired = (dir / "repaired.mcap").string();
-  ChildProcess recorder({Cli(), "record", "-o", file, "--domain", std::to_string(domain.id()), "--topics",
+  ChildProcess recorder(Cli(), {"record", "-o", file, "--domain", std::to_string(domain.id()), "--topics",
                          "^(camera/image|odometry/velocity)$"},
-                        dir / "record.log");
-  ASSERT_TRUE(recorder.started());
+                        {.log_file = (dir / "record.log").string()});
   auto robot = MakeParticipant(domain.id(), "robot1");
   auto images = robot->CreateRawWriter(bus::TopicSpec{"camera/image", "rslam::msg::Image",
                                                       bus::KeyReaderFor<msg::Image>(), bus::QosPreset::kSensor, "robot1"});

@@ -44,10 +44,9 @@ TEST(RecordPlayRoundTrip, TwoRobotsRecordedCountedAndPlayedBackByteIdenticalInOr
   const auto dir = ScratchDir();
   const std::string file = (dir / "run.mcap").string();
   const std::string d = std::to_string(domain.id());
-  ChildProcess recorder({Cli(), "record", "-o", file, "--domain", d, "--topics",
+  ChildProcess recorder(Cli(), {"record", "-o", file, "--domain", d, "--topics",
                          "^(camera/image|odometry/velocity|pose_cells/action|experience_map/map)$"},
-                        dir / "record.log");
-  ASSERT_TRUE(recorder.started());
+                        {.log_file = (dir / "record.log").string()});
 
   std::map<std::string, std::unique_ptr<bus::Participant>> robots;
   std::vector<Stream> streams;
@@ -288,9 +287,9 @@ TEST(RecordPlayRoundTrip, LoopRepeatsUntilInterrupted) {
   const auto sent = WriteTwoRobotRecording(file);
   auto tester = MakeParticipant(domain.id(), "tester");
   RawCollector robot2(*tester, "odometry/velocity", "rslam::msg::Velocity", bus::QosPreset::kStream, "robot2");
-  ChildProcess player({Cli(), "play", file, "--loop", "--rate", "4", "--topics", "^odometry/", "--domain",
+  ChildProcess player(Cli(), {"play", file, "--loop", "--rate", "4", "--topics", "^odometry/", "--domain",
                        std::to_string(domain.id()), "--wait-for-readers", "0"},
-                      dir / "play.log");
+                      {.log_file = (dir / "play.log").string()});
   ASSERT_TRUE(robot2.WaitForCount(3 * 20, 20s)) << player.Output();
   player.Signal(SIGINT);
   ASSERT_EQ(player.WaitExit(10s), 0) << player.Output();
@@ -305,8 +304,8 @@ TEST(RecordProcess, SigtermFinishesTheFileCleanly) {
   rslam::testing::TestDomain domain;
   const auto dir = ScratchDir();
   const std::string file = (dir / "term.mcap").string();
-  ChildProcess recorder({Cli(), "record", "-o", file, "--domain", std::to_string(domain.id()), "--compression", "lz4"},
-                        dir / "record.log");
+  ChildProcess recorder(Cli(), {"record", "-o", file, "--domain", std::to_string(domain.id()), "--compression", "lz4"},
+                        {.log_file = (dir / "record.log").string()});
   ASSERT_TRUE(recorder.WaitForOutput("[record] recording", 15s)) << recorder.Output();
   recorder.Signal(SIGTERM);
   ASSERT_EQ(recorder.WaitExit(15s), 0) << recorder.Output();

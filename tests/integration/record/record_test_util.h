@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -28,12 +27,13 @@
 #include "common/bus/participant.h"
 #include "common/bus/typed_cdr.h"
 #include "rslam/msg/all_messages.h"
+#include "tests/support/child_process.h"
 
-extern char** environ;
 
 namespace rslam::record::testing {
 
 using namespace std::chrono_literals;
+using rslam::testing::ChildProcess;
 namespace fs = std::filesystem;
 
 inline fs::path ScratchDir() {
@@ -47,72 +47,6 @@ inline fs::path ScratchDir() {
   return dir;
 }
 
-// A child process with stdout and stderr in a log file; SIGKILLed and reaped on destruction.
-class ChildProcess {
- public:
-  ChildProcess(const std::vector<std::string>& argv, const fs::path& log) : log_(log) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    std::vector<char*> args;
-    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    const int rc = posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    if (rc != 0) pid_ = -1;
-  }
-  ~ChildProcess() {
-    if (pid_ > 0 && !exited_) {
-      ::kill(pid_, SIGKILL);
-      int status = 0;
-      ::waitpid(pid_, &status, 0);
-    }
-  }
-  ChildProcess(const ChildProcess&) = delete;
-  ChildProcess& operator=(const ChildProcess&) = delete;
-
-  bool started() const { return pid_ > 0; }
-  void Signal(int sig) {
-    if (pid_ > 0 && !exited_) ::kill(pid_, sig);
-  }
-  // The exit code (128 + signal for a signal death), or nullopt if still running at the deadline.
-  std::optional<int> WaitExit(std::chrono::milliseconds timeout) {
-    if (exited_) return code_;
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (true) {
-      int status = 0;
-      const pid_t r = ::waitpid(pid_, &status, WNOHANG);
-      if (r == pid_) {
-        exited_ = true;
-        code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-        return code_;
-      }
-      if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
-      std::this_thread::sleep_for(10ms);  // waitpid has no timeout
-    }
-  }
-  std::string Output() const {
-    std::ifstream in(log_);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-  bool WaitForOutput(const std::string& text, std::chrono::milliseconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (Output().find(text) == std::string::npos) {
-      if (std::chrono::steady_clock::now() >= deadline || WaitExit(0ms)) return false;
-      std::this_thread::sleep_for(20ms);  // polling the child's log
-    }
-    return true;
-  }
-
- private:
-  fs::path log_;
-  pid_t pid_ = -1;
-  bool exited_ = false;
-  int code_ = -1;
-};
 
 // build/bin/rslam once it has the record commands, else the test-only CLI.
 inline std::string Cli() {
@@ -132,11 +66,8 @@ struct CliResult {
 // Runs the CLI to completion (at most timeout).
 inline CliResult RunCli(const std::vector<std::string>& args, const fs::path& log,
                         std::chrono::milliseconds timeout = 60s) {
-  std::vector<std::string> argv = {Cli()};
-  argv.insert(argv.end(), args.begin(), args.end());
-  ChildProcess p(argv, log);
+  ChildProcess p(Cli(), args, {.log_file = log.string()});
   CliResult r;
-  if (!p.started()) return r;
   if (auto code = p.WaitExit(timeout)) r.code = *code;
   r.output = p.Output();
   return r;

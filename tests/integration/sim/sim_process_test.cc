@@ -2,11 +2,6 @@
 // wheel odometry, executes motion commands with feedback, stops on STOP, and rejects (and counts)
 // a malformed command.
 
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -23,6 +18,7 @@
 
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
+#include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
 namespace rslam::sim {
@@ -30,76 +26,9 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// The simulator as a child process, killed when the guard goes (even when the test fails).
-class SimProcess {
- public:
-  explicit SimProcess(const std::vector<std::string>& args) {
-    log_path_ = (std::filesystem::temp_directory_path() / ("rslam-sim-it-" + std::to_string(::getpid()) + "-" +
-                                                            std::to_string(next_id_++) + ".log"))
-                    .string();
-    std::vector<std::string> storage{RSLAM_BINARY_DIR "/bin/rslam-sim"};
-    storage.insert(storage.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : storage) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    pid_ = ::fork();
-    if (pid_ == 0) {
-      const int fd = ::open(log_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (fd >= 0) {
-        ::dup2(fd, 1);
-        ::dup2(fd, 2);
-      }
-      ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-  }
-  ~SimProcess() {
-    if (!exit_code_ && pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-    std::error_code ignored;
-    std::filesystem::remove(log_path_, ignored);
-  }
-  SimProcess(const SimProcess&) = delete;
-  SimProcess& operator=(const SimProcess&) = delete;
-
-  // The exit code, or nothing if it still runs at the deadline.
-  std::optional<int> WaitExit(std::chrono::milliseconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (!exit_code_) {
-      int status = 0;
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        exit_code_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-        break;
-      }
-      if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
-      std::this_thread::sleep_for(10ms);
-    }
-    return exit_code_;
-  }
-  std::string Output() const {
-    std::ifstream in(log_path_);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-  }
-
- private:
-  static inline int next_id_ = 0;
-  pid_t pid_ = -1;
-  std::string log_path_;
-  std::optional<int> exit_code_;
-};
-
-bool WaitUntil(const std::function<bool()>& condition, std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() >= deadline) return false;
-    std::this_thread::sleep_for(5ms);
-  }
-  return true;
-}
+const std::string kSim = RSLAM_BINARY_DIR "/bin/rslam-sim";
+using testing::ChildProcess;
+using testing::WaitFor;
 
 class SimProcessTest : public ::testing::Test {
  protected:
@@ -140,7 +69,7 @@ class SimProcessTest : public ::testing::Test {
 
   // Waits for feedback on command seq in the given state; collects everything seen.
   bool AwaitFeedback(uint64_t seq, msg::MotionState state, std::chrono::milliseconds timeout) {
-    return WaitUntil(
+    return WaitFor(
         [&] {
           for (auto& f : feedback_->Take()) feedback_seen_.push_back(f);
           for (const auto& f : feedback_seen_)
@@ -163,7 +92,7 @@ class SimProcessTest : public ::testing::Test {
 };
 
 TEST_F(SimProcessTest, PublishesFramesWithGroundTruthAndWheelOdometryOfTheSameFrame) {
-  SimProcess sim(SimArgs());
+  ChildProcess sim(kSim, SimArgs());
   const auto image = camera_->TakeOne(15s);
   ASSERT_TRUE(image.has_value()) << sim.Output();
   EXPECT_EQ(image->encoding, "bgr8");
@@ -173,7 +102,7 @@ TEST_F(SimProcessTest, PublishesFramesWithGroundTruthAndWheelOdometryOfTheSameFr
   EXPECT_EQ(image->header.robot_id, "robot1");
   // Ground truth and wheel odometry of the same frame carry the same header.
   std::optional<msg::GroundTruthPose> truth;
-  ASSERT_TRUE(WaitUntil(
+  ASSERT_TRUE(WaitFor(
       [&] {
         for (auto& t : truth_->Take())
           if (t.header.frame_seq == image->header.frame_seq) truth = t;
@@ -182,7 +111,7 @@ TEST_F(SimProcessTest, PublishesFramesWithGroundTruthAndWheelOdometryOfTheSameFr
       5s));
   EXPECT_EQ(truth->header, image->header);
   std::optional<msg::Velocity> wheel;
-  ASSERT_TRUE(WaitUntil(
+  ASSERT_TRUE(WaitFor(
       [&] {
         for (auto& w : wheel_->Take())
           if (w.header.frame_seq == image->header.frame_seq) wheel = w;
@@ -201,9 +130,9 @@ TEST_F(SimProcessTest, PublishesFramesWithGroundTruthAndWheelOdometryOfTheSameFr
 }
 
 TEST_F(SimProcessTest, MoveCommandAdvancesTheRobotAndReportsExecutingThenDone) {
-  SimProcess sim(SimArgs());
+  ChildProcess sim(kSim, SimArgs());
   ASSERT_TRUE(commands_->WaitForSubscribers(1, 15s)) << sim.Output();
-  ASSERT_TRUE(WaitUntil([&] { return LatestTruth().header.frame_seq > 0; }, 10s)) << sim.Output();
+  ASSERT_TRUE(WaitFor([&] { return LatestTruth().header.frame_seq > 0; }, 10s)) << sim.Output();
   const msg::GroundTruthPose before = LatestTruth();
   Send(1, msg::MotionKind::MOTION_MOVE, 0.0, 0.5);  // the default start is far from every wall
   ASSERT_TRUE(AwaitFeedback(1, msg::MotionState::MOTION_DONE, 10s)) << sim.Output();
@@ -221,9 +150,9 @@ TEST_F(SimProcessTest, MoveCommandAdvancesTheRobotAndReportsExecutingThenDone) {
 }
 
 TEST_F(SimProcessTest, StopEndsARunningTurn) {
-  SimProcess sim(SimArgs());
+  ChildProcess sim(kSim, SimArgs());
   ASSERT_TRUE(commands_->WaitForSubscribers(1, 15s)) << sim.Output();
-  ASSERT_TRUE(WaitUntil([&] { return LatestTruth().header.frame_seq > 0; }, 10s)) << sim.Output();
+  ASSERT_TRUE(WaitFor([&] { return LatestTruth().header.frame_seq > 0; }, 10s)) << sim.Output();
   const double start_theta = LatestTruth().theta_rad;
   Send(1, msg::MotionKind::MOTION_ROTATE, 6.0, 0.0);  // 7.5 s of simulated turning at 0.8 rad/s
   ASSERT_TRUE(AwaitFeedback(1, msg::MotionState::MOTION_EXECUTING, 10s));
@@ -232,20 +161,20 @@ TEST_F(SimProcessTest, StopEndsARunningTurn) {
   std::this_thread::sleep_for(100ms);
   const msg::GroundTruthPose stopped = LatestTruth();
   // Let 20 more frames pass: the robot stays where it stopped.
-  ASSERT_TRUE(WaitUntil([&] { return LatestTruth().header.frame_seq >= stopped.header.frame_seq + 20; }, 10s));
+  ASSERT_TRUE(WaitFor([&] { return LatestTruth().header.frame_seq >= stopped.header.frame_seq + 20; }, 10s));
   EXPECT_DOUBLE_EQ(LatestTruth().theta_rad, stopped.theta_rad);
   EXPECT_GT(std::abs(std::remainder(stopped.theta_rad - start_theta, 2 * M_PI)), 0.0);
   for (const auto& f : feedback_seen_) EXPECT_FALSE(f.command_seq == 1 && f.state == msg::MotionState::MOTION_DONE);
 }
 
 TEST_F(SimProcessTest, RejectsAndCountsAMoveWithANaNDistance) {
-  SimProcess sim(SimArgs());
+  ChildProcess sim(kSim, SimArgs());
   ASSERT_TRUE(commands_->WaitForSubscribers(1, 15s)) << sim.Output();
-  ASSERT_TRUE(WaitUntil([&] { return LatestTruth().header.frame_seq > 0; }, 10s)) << sim.Output();
+  ASSERT_TRUE(WaitFor([&] { return LatestTruth().header.frame_seq > 0; }, 10s)) << sim.Output();
   const msg::GroundTruthPose before = LatestTruth();
   Send(7, msg::MotionKind::MOTION_MOVE, 0.0, std::numeric_limits<double>::quiet_NaN());
   // The heartbeat (about once a second) counts it as rejected.
-  ASSERT_TRUE(WaitUntil(
+  ASSERT_TRUE(WaitFor(
       [&] {
         for (auto& s : status_->Take())
           if (s.service == "sim" && s.messages_rejected >= 1) return true;
@@ -268,7 +197,7 @@ TEST_F(SimProcessTest, RejectsAndCountsAMoveWithANaNDistance) {
 TEST_F(SimProcessTest, ExitsWithCode2OnAMissingWorldFile) {
   std::vector<std::string> args = SimArgs();
   args.insert(args.end(), {"--set", "sim.world_yaml=/nonexistent/world.yaml"});
-  SimProcess sim(args);
+  ChildProcess sim(kSim, args);
   const auto code = sim.WaitExit(15s);
   ASSERT_TRUE(code.has_value());
   EXPECT_EQ(*code, 2) << sim.Output();
@@ -278,7 +207,7 @@ TEST_F(SimProcessTest, ExitsWithCode2OnAMissingWorldFile) {
 TEST_F(SimProcessTest, StopsAfterMaxFrames) {
   std::vector<std::string> args = SimArgs();
   args.insert(args.end(), {"--set", "sim.max_frames=30"});
-  SimProcess sim(args);
+  ChildProcess sim(kSim, args);
   const auto code = sim.WaitExit(15s);
   ASSERT_TRUE(code.has_value());
   EXPECT_EQ(*code, 0) << sim.Output();

@@ -15,15 +15,15 @@
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
 #include "tests/integration/camera/image_test_util.h"
-#include "tests/integration/occupancy/service_process.h"
+#include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
 namespace rslam {
 namespace {
 
 using namespace std::chrono_literals;
-using testing::ServiceProcess;
-using testing::TempDir;
+using testing::ChildProcess;
+using testing::ScratchFolder;
 
 const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-templates";
 
@@ -39,7 +39,7 @@ class TemplatesServiceTest : public ::testing::Test {
   }
 
   // Whole-image 32x16 patch templates; a long save period so the journal is what survives a kill.
-  std::unique_ptr<ServiceProcess> Start(std::vector<std::string> extra = {}) {
+  std::unique_ptr<ChildProcess> Start(std::vector<std::string> extra = {}) {
     const int readers = images_->MatchedSubscribers();
     const int writers = views_->MatchedPublishers();
     std::vector<std::string> args{"--domain",    std::to_string(domain_.id()), "--state-dir",
@@ -53,8 +53,8 @@ class TemplatesServiceTest : public ::testing::Test {
       args.push_back("--set");
       args.push_back("templates." + k);
     }
-    auto process = std::make_unique<ServiceProcess>(kBinary, args);
-    const bool matched = testing::WaitUntil(
+    auto process = std::make_unique<ChildProcess>(kBinary, args);
+    const bool matched = testing::WaitFor(
         [&] { return images_->MatchedSubscribers() > readers && views_->MatchedPublishers() > writers; }, 10s);
     EXPECT_TRUE(matched) << process->Output();
     return process;
@@ -79,7 +79,7 @@ class TemplatesServiceTest : public ::testing::Test {
   }
 
   testing::TestDomain domain_;
-  TempDir state_;
+  ScratchFolder state_;
   std::unique_ptr<bus::Participant> participant_;
   std::unique_ptr<bus::Publisher<msg::Image>> images_;
   std::unique_ptr<bus::Subscriber<msg::ViewTemplate>> views_;
@@ -214,7 +214,7 @@ TEST_F(TemplatesServiceTest, CleanStopAndRestartKeepsTemplates) {
 TEST_F(TemplatesServiceTest, PeriodicSaveMovesTheJournalIntoTheStateFile) {
   const std::filesystem::path journal = state_.path() / "templates.journal";
   // A short save period (Start() uses a long one).
-  auto templates = std::make_unique<ServiceProcess>(
+  auto templates = std::make_unique<ChildProcess>(
       kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--state-dir",
                                         state_.path().string(), "--set", "service.heartbeat_period_s=0.1", "--set",
                                         "service.state_save_period_s=0.2", "--set", "templates.image_crop_x_min=0",
@@ -222,9 +222,9 @@ TEST_F(TemplatesServiceTest, PeriodicSaveMovesTheJournalIntoTheStateFile) {
                                         "templates.image_crop_y_min=0", "--set", "templates.image_crop_y_max=-1",
                                         "--set", "templates.template_x_size=32", "--set",
                                         "templates.template_y_size=16", "--set", "templates.shift_match=4"});
-  ASSERT_TRUE(testing::WaitUntil([&] { return images_->MatchedSubscribers() >= 1; }, 10s)) << templates->Output();
+  ASSERT_TRUE(testing::WaitFor([&] { return images_->MatchedSubscribers() >= 1; }, 10s)) << templates->Output();
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(Send(Scene(500 + i), i)) << templates->Output();
-  EXPECT_TRUE(testing::WaitUntil([&] { return std::filesystem::file_size(journal) == 0; }, 5s))
+  EXPECT_TRUE(testing::WaitFor([&] { return std::filesystem::file_size(journal) == 0; }, 5s))
       << "the periodic save empties the journal\n" << templates->Output();
   templates->Signal(SIGKILL);
   templates->WaitExit(5s);
