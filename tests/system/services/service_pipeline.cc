@@ -34,14 +34,14 @@ ServicePipeline::ServicePipeline(int domain, PipelineOptions options) : domain_(
   status_subscriber_ = std::make_unique<bus::Subscriber<msg::ServiceStatus>>(
       *participant_, bus::topics::kStatus, [this](const msg::ServiceStatus& status) {
         std::lock_guard lock(mutex_);
-        statuses_[status.service] = status;
+        running_[status.service] = status.state;
       });
   const auto await_running = [this](const std::vector<std::string>& names) {
     const bool up = testing::WaitFor(
         [&] {
           std::lock_guard lock(mutex_);
           for (const auto& n : names)
-            if (statuses_.count(n) == 0 || statuses_.at(n).state != "running") return false;
+            if (running_.count(n) == 0 || running_.at(n) != "running") return false;
           return true;
         },
         options_.startup_timeout);

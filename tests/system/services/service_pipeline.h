@@ -76,7 +76,7 @@ class ServicePipeline {
   std::mutex mutex_;
   std::vector<msg::ExperiencePose> poses_;
   std::optional<msg::ExperienceMap> latest_map_;
-  std::map<std::string, msg::ServiceStatus> statuses_;  // service name in heartbeats -> latest
+  std::map<std::string, std::string> running_;  // service name in heartbeats -> state
   std::unique_ptr<bus::Subscriber<msg::ExperiencePose>> pose_subscriber_;
   std::unique_ptr<bus::Subscriber<msg::ExperienceMap>> map_subscriber_;
   std::unique_ptr<bus::Subscriber<msg::ServiceStatus>> status_subscriber_;
