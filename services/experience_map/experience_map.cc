@@ -189,7 +189,10 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         }
       }
       if (changed) SeedLocalRegion(current_, to);
+      const double dead_reckoned = accum_facing_;
       SetCurrent(to, a.relative_angle_rad);
+      accum_facing_ =
+          ClipAngle(dead_reckoned + config_.exp_heading_correction * ClipAngle(accum_facing_ - dead_reckoned));
       break;
     }
   }

@@ -19,6 +19,12 @@ struct ExperienceMapConfig {
   // Average the observed transform into an existing link when the robot re-traverses it
   // (000 eq. 2). OpenRatSLAM keeps the first observation only (false).
   bool exp_average_repeated_links = true;
+  // On recognising an experience (link or set), the share of the difference between the dead-
+  // reckoned heading and the recognised one (the experience's facing plus the view's offset) the
+  // robot's heading takes: 1 = OpenRatSLAM (the recognised heading), 0 = keep dead reckoning.
+  // A recognised heading is only as good as the view's shift match (about 1 degree a pixel) and
+  // the experience's own facing; blending keeps the drift correction and halves that noise.
+  double exp_heading_correction = 1.0;
 
   template <class V>
   void VisitFields(V& v) {
@@ -33,6 +39,8 @@ struct ExperienceMapConfig {
       "local correction stops when a local sweep moves nothing more than this (m, rad)");
     v("exp_average_repeated_links", exp_average_repeated_links,
       "average re-traversals into the existing link (000 eq. 2)");
+    v("exp_heading_correction", exp_heading_correction,
+      "on recognition, the share of the heading difference taken from the experience (1 = OpenRatSLAM, 0 = none)");
   }
 
   void Validate() const {
@@ -43,6 +51,7 @@ struct ExperienceMapConfig {
     Require(exp_relax_budget_links >= 0, "exp_relax_budget_links", "must be non-negative");
     Require(exp_local_region_links >= 0, "exp_local_region_links", "must be non-negative");
     Require(exp_relax_tolerance >= 0, "exp_relax_tolerance", "must be non-negative");
+    Require(exp_heading_correction >= 0 && exp_heading_correction <= 1, "exp_heading_correction", "must be in [0, 1]");
   }
 };
 

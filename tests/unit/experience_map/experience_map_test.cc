@@ -136,6 +136,37 @@ TEST(ExperienceMap, RepeatedTransitionAveragesLinkByEq2) {
   EXPECT_EQ(map.links().size(), 3u);  // no duplicate link
 }
 
+// Experience 0 faces +y (90 degrees); the robot drives a loop whose dead reckoning comes back
+// facing `back_facing` and recognises experience 0 with the view turned `relative` rad.
+double HeadingAfterRecognising(double correction, double back_facing, double relative) {
+  ExperienceMapConfig config = NoCorrection();
+  config.exp_heading_correction = correction;
+  ExperienceMap map(config);
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(1, 0));
+  map.Integrate(0.0, back_facing - kPi / 2, 1.0);
+  ExperienceAction back = LinkTo(Kind::kLink, 1, 0);
+  back.relative_angle_rad = relative;
+  map.Apply(back);
+  return map.RobotPose().th_rad;
+}
+
+TEST(ExperienceMap, RecognitionTakesTheConfiguredShareOfTheHeadingDifference) {
+  // The recognised heading: experience 0's facing (pi/2) plus the view's offset (0.1).
+  EXPECT_NEAR(HeadingAfterRecognising(1.0, kPi / 2 + 0.3, 0.1), kPi / 2 + 0.1, 1e-12);  // OpenRatSLAM
+  EXPECT_NEAR(HeadingAfterRecognising(0.0, kPi / 2 + 0.3, 0.1), kPi / 2 + 0.3, 1e-12);  // dead reckoning
+  EXPECT_NEAR(HeadingAfterRecognising(0.5, kPi / 2 + 0.3, 0.1), kPi / 2 + 0.2, 1e-12);
+  // Across the +-pi seam the blend goes the short way round: halfway between 3.1 and -3.1 is pi.
+  EXPECT_NEAR(std::abs(HeadingAfterRecognising(0.5, 3.1, -3.1 - kPi / 2)), kPi, 1e-9);
+}
+
+TEST(ExperienceMap, HeadingCorrectionOutsideZeroToOneIsRefused) {
+  ExperienceMapConfig config;
+  config.exp_heading_correction = 1.5;
+  EXPECT_THROW(config.Validate(), ConfigError);
+}
+
 proto::ExperienceMap TwoExperiencesOneMetreOff() {
   proto::ExperienceMap m;
   auto* a = m.add_experiences();
