@@ -23,7 +23,7 @@ struct ExperienceMapConfig {
   // reckoned heading and the recognised one (the experience's facing plus the view's offset) the
   // robot's heading takes: 1 = OpenRatSLAM (the recognised heading), 0 = keep dead reckoning.
   // A recognised heading is only as good as the view's shift match (about 1 degree a pixel) and
-  // the experience's own facing; blending keeps the drift correction and halves that noise.
+  // the experience's own facing; a blend keeps most of the drift correction and less noise.
   double exp_heading_correction = 1.0;
 
   template <class V>
