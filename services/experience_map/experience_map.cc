@@ -191,8 +191,10 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       if (changed) SeedLocalRegion(current_, to);
       const double dead_reckoned = accum_facing_;
       SetCurrent(to, a.relative_angle_rad);
-      accum_facing_ =
-          ClipAngle(dead_reckoned + config_.exp_heading_correction * ClipAngle(accum_facing_ - dead_reckoned));
+      if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
+        accum_facing_ =
+            ClipAngle(dead_reckoned + config_.exp_heading_correction * ClipAngle(accum_facing_ - dead_reckoned));
+      }
       break;
     }
   }

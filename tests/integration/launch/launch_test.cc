@@ -106,7 +106,7 @@ TEST_F(LaunchTest, RestartsAKilledServiceAndStopsEverythingOnSigterm) {
       20s))
       << "the launcher did not restart the killed pose cells\n"
       << launch.Tail();
-  EXPECT_NE(launch.Output().find("pose_cells"), std::string::npos) << launch.Tail();
+  EXPECT_NE(launch.Output().find("restarted pose_cells"), std::string::npos) << launch.Tail();
 
   // `rslam status --json` lists both services with their endpoints.
   testing::ChildProcess status(kRslam, {"status", "--domain", std::to_string(domain_.id()), "--dds", "cyclone", "--wait",

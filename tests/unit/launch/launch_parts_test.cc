@@ -72,10 +72,20 @@ TEST(ProcessSupervisorTest, ACleanExitIsNotRestarted) {
 }
 
 TEST(ProcessSupervisorTest, StopAllKillsAChildThatIgnoresSigterm) {
+  testing::ScratchFolder scratch;
   ProcessSupervisor supervisor;
-  supervisor.Start(Shell("stubborn", "trap '' TERM; while :; do sleep 0.05; done"));
+  ProcessSpec stubborn = Shell("stubborn", "trap '' TERM; echo trapped; while :; do sleep 0.05; done");
+  stubborn.log_file = scratch / "stubborn.log";
+  supervisor.Start(stubborn);
   supervisor.Start(Shell("polite", "exec sleep 30"));
-  std::this_thread::sleep_for(100ms);  // let the shell install its trap (no signal to await)
+  // The shell says when its trap is in place.
+  ASSERT_TRUE(testing::WaitFor(
+      [&] {
+        std::ifstream log(stubborn.log_file);
+        std::string line;
+        return std::getline(log, line) && line == "trapped";
+      },
+      10s));
   EXPECT_FALSE(supervisor.StopAll(300ms));
   EXPECT_FALSE(StatusOf(supervisor, "stubborn").running);
   EXPECT_FALSE(StatusOf(supervisor, "polite").running);
