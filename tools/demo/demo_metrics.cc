@@ -1,5 +1,7 @@
 #include "tools/demo/demo_metrics.h"
 
+#include "tools/eval/trajectory_alignment.h"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -99,29 +101,22 @@ std::map<uint32_t, sim::Pose2D> ExperienceGroundTruth(const DemoObservations& se
 
 std::optional<sim::Pose2D> FitMapToWorld(std::span<const msg::Experience> experiences,
                                          const std::map<uint32_t, sim::Pose2D>& experience_truth) {
-  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> pairs;  // (map, world)
-  for (const auto& e : experiences) {
-    const auto it = experience_truth.find(e.id);
-    if (it != experience_truth.end()) pairs.push_back({{e.x_m, e.y_m}, {it->second.x, it->second.y}});
+  // The SE(2) alignment of `rslam eval trajectory` (Umeyama, no scale), experiences paired by id.
+  std::map<uint32_t, eval::StampedPose2D> in_map;
+  for (const auto& e : experiences)
+    if (experience_truth.count(e.id)) in_map[e.id] = {static_cast<int64_t>(e.id), e.x_m, e.y_m, {}};
+  std::vector<eval::StampedPose2D> estimate, truth;
+  for (const auto& [id, pose] : in_map) {
+    estimate.push_back(pose);
+    const sim::Pose2D& w = experience_truth.at(id);
+    truth.push_back({static_cast<int64_t>(id), w.x, w.y, {}});
   }
-  if (pairs.size() < 2) return std::nullopt;
-  Eigen::Vector2d map_mean = Eigen::Vector2d::Zero(), world_mean = Eigen::Vector2d::Zero();
-  for (const auto& [m, w] : pairs) {
-    map_mean += m;
-    world_mean += w;
+  try {
+    const eval::TrajectoryError fit = eval::AlignAndCompare(estimate, truth, false, Duration::zero());
+    return sim::Pose2D{fit.translation_x, fit.translation_y, fit.rotation_rad};
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;  // fewer than two pairs, or all at one point
   }
-  map_mean /= static_cast<double>(pairs.size());
-  world_mean /= static_cast<double>(pairs.size());
-  double dot = 0.0, cross = 0.0;
-  for (const auto& [m, w] : pairs) {
-    const Eigen::Vector2d a = m - map_mean, b = w - world_mean;
-    dot += a.dot(b);
-    cross += a.x() * b.y() - a.y() * b.x();
-  }
-  const double theta = std::atan2(cross, dot);
-  const double c = std::cos(theta), s = std::sin(theta);
-  return sim::Pose2D{world_mean.x() - (c * map_mean.x() - s * map_mean.y()),
-                     world_mean.y() - (s * map_mean.x() + c * map_mean.y()), theta};
 }
 
 LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
