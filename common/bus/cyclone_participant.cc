@@ -320,6 +320,10 @@ const ddsi_serdata_ops kSerdataOps = {
     .free = SerdataFree,
     .print = SerdataPrint,
     .get_keyhash = SerdataGetKeyhash,
+#ifdef DDS_HAS_SHM
+    .get_sample_size = nullptr,  // the bus does not use the shared-memory (iceoryx) transport
+    .from_iox_buffer = nullptr,
+#endif
 };
 
 void SertypeFree(ddsi_sertype* t) {

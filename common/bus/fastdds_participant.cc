@@ -144,7 +144,7 @@ class FastDdsWriter final : public RawWriter {
   }
 
   void Write(std::span<const uint8_t> cdr) override {
-    FastDdsSample sample{cdr, {}};
+    FastDdsSample sample{cdr, {}, nullptr, {}};
     if (!writer_->write(&sample)) throw BusError("Fast DDS: write failed (a reliable reader did not keep up)");
   }
 

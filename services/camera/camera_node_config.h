@@ -105,7 +105,7 @@ struct CameraNodeConfig {
   void Validate() const {
     Require(source == "images" || source == "video" || source == "device" || source == "sim", "source",
             "must be images, video, device or sim, got '" + source + "'");
-    Require(source != "images" && source != "video" || !path.empty(), "path",
+    Require((source != "images" && source != "video") || !path.empty(), "path",
             "needs a folder, list or video file for source " + source);
     Require(source != "device" || !device.empty(), "device", "must name the device, e.g. /dev/video0");
     Require(width >= 0, "width", "must be >= 0");

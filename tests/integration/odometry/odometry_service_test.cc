@@ -117,7 +117,9 @@ TEST_F(OdometryServiceTest, IdenticalFramesGiveZeroSpeedAndDtFromIrregularStamps
     ASSERT_TRUE(v) << odometry->Output();
     EXPECT_EQ(v->vrot_radps, 0.0);
     EXPECT_NEAR(v->vtrans_mps, 0.0, 1e-9);
-    if (i > 0) EXPECT_NEAR(v->dt_s, (stamps[i] - stamps[i - 1]) * 1e-9, 1e-12);
+    if (i > 0) {
+      EXPECT_NEAR(v->dt_s, (stamps[i] - stamps[i - 1]) * 1e-9, 1e-12);
+    }
   }
 }
 

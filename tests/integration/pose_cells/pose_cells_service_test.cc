@@ -195,7 +195,9 @@ TEST_F(PoseCellsServiceTest, SigtermSavesStateAndRestartContinuesTheActionSequen
     if (i < 20) continue;
     EXPECT_EQ(actions[i - 20].action_seq, static_cast<uint64_t>(i));
     EXPECT_EQ(actions[i - 20].kind, KindOf(want.kind)) << "frame " << i;
-    if (want.kind != pose_cells::Action::Kind::kNone) EXPECT_EQ(actions[i - 20].experience_id, want.experience_id);
+    if (want.kind != pose_cells::Action::Kind::kNone) {
+      EXPECT_EQ(actions[i - 20].experience_id, want.experience_id);
+    }
   }
 }
 

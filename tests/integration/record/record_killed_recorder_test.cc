@@ -60,7 +60,7 @@ TEST(KilledRecorder, RecoverKeepsEveryMessageOfTheCompleteChunks) {
   const std::string repaired = (dir / "repaired.mcap").string();
   ChildProcess recorder(Cli(), {"record", "-o", file, "--domain", std::to_string(domain.id()), "--topics",
                          "^(camera/image|odometry/velocity)$"},
-                        {.log_file = (dir / "record.log").string()});
+                        {.environment = {}, .log_file = (dir / "record.log").string()});
   auto robot = MakeParticipant(domain.id(), "robot1");
   auto images = robot->CreateRawWriter(bus::TopicSpec{"camera/image", "rslam::msg::Image",
                                                       bus::KeyReaderFor<msg::Image>(), bus::QosPreset::kSensor, "robot1"});

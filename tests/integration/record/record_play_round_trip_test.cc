@@ -46,7 +46,7 @@ TEST(RecordPlayRoundTrip, TwoRobotsRecordedCountedAndPlayedBackByteIdenticalInOr
   const std::string d = std::to_string(domain.id());
   ChildProcess recorder(Cli(), {"record", "-o", file, "--domain", d, "--topics",
                          "^(camera/image|odometry/velocity|pose_cells/action|experience_map/map)$"},
-                        {.log_file = (dir / "record.log").string()});
+                        {.environment = {}, .log_file = (dir / "record.log").string()});
 
   std::map<std::string, std::unique_ptr<bus::Participant>> robots;
   std::vector<Stream> streams;
@@ -289,7 +289,7 @@ TEST(RecordPlayRoundTrip, LoopRepeatsUntilInterrupted) {
   RawCollector robot2(*tester, "odometry/velocity", "rslam::msg::Velocity", bus::QosPreset::kStream, "robot2");
   ChildProcess player(Cli(), {"play", file, "--loop", "--rate", "4", "--topics", "^odometry/", "--domain",
                        std::to_string(domain.id()), "--wait-for-readers", "0"},
-                      {.log_file = (dir / "play.log").string()});
+                      {.environment = {}, .log_file = (dir / "play.log").string()});
   ASSERT_TRUE(robot2.WaitForCount(3 * 20, 20s)) << player.Output();
   player.Signal(SIGINT);
   ASSERT_EQ(player.WaitExit(10s), 0) << player.Output();
@@ -305,7 +305,7 @@ TEST(RecordProcess, SigtermFinishesTheFileCleanly) {
   const auto dir = ScratchDir();
   const std::string file = (dir / "term.mcap").string();
   ChildProcess recorder(Cli(), {"record", "-o", file, "--domain", std::to_string(domain.id()), "--compression", "lz4"},
-                        {.log_file = (dir / "record.log").string()});
+                        {.environment = {}, .log_file = (dir / "record.log").string()});
   ASSERT_TRUE(recorder.WaitForOutput("[record] recording", 15s)) << recorder.Output();
   recorder.Signal(SIGTERM);
   ASSERT_EQ(recorder.WaitExit(15s), 0) << recorder.Output();

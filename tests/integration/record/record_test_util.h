@@ -66,7 +66,7 @@ struct CliResult {
 // Runs the CLI to completion (at most timeout).
 inline CliResult RunCli(const std::vector<std::string>& args, const fs::path& log,
                         std::chrono::milliseconds timeout = 60s) {
-  ChildProcess p(Cli(), args, {.log_file = log.string()});
+  ChildProcess p(Cli(), args, {.environment = {}, .log_file = log.string()});
   CliResult r;
   if (auto code = p.WaitExit(timeout)) r.code = *code;
   r.output = p.Output();
