@@ -242,6 +242,7 @@ PlayReport PlayFiles(bus::Participant& participant, const std::vector<std::strin
       ++report.loops;
       if (report.messages == published_before) break;  // an empty window would loop forever
     } while (options.loop && !stop.stop_requested());
+    report.stopped = stop.stop_requested();  // a stop between two passes ends the loop here
   } catch (const PlaybackStopped&) {
     report.stopped = true;
   }
