@@ -277,6 +277,11 @@ proto::ExplorerState ExplorationPlanner::ToProto() const {
     out->mutable_cell()->set_y(cell.second);
     out->set_attempts(attempts);
   }
+  for (const auto& [x, y] : blocking_obstacles_) {
+    auto* out = state.add_blocking_obstacles();
+    out->set_x(x);
+    out->set_y(y);
+  }
   if (last_pirouette_) {
     state.mutable_last_pirouette()->set_x(last_pirouette_->x);
     state.mutable_last_pirouette()->set_y(last_pirouette_->y);
@@ -297,6 +302,12 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
       throw std::invalid_argument("explorer state: bad blocked-goal entry");
     blocked[{b.cell().x(), b.cell().y()}] = b.attempts();
   }
+  std::vector<std::pair<double, double>> obstacles;
+  for (const auto& o : state.blocking_obstacles()) {
+    if (!std::isfinite(o.x()) || !std::isfinite(o.y()))
+      throw std::invalid_argument("explorer state: blocking obstacle not finite");
+    obstacles.emplace_back(o.x(), o.y());
+  }
   std::optional<Pose2D> last;
   if (state.has_last_pirouette()) {
     last = Pose2D{state.last_pirouette().x(), state.last_pirouette().y(), state.last_pirouette().theta()};
@@ -304,6 +315,7 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
   }
   set_aside_ = std::move(set_aside);
   blocked_attempts_ = std::move(blocked);
+  blocking_obstacles_ = std::move(obstacles);
   last_pirouette_ = last;
 }
 

@@ -242,6 +242,14 @@ TEST(ExplorationPlannerTest, ABlockedMoveSendsTheNextPlanAroundTheObstacleUntilT
   const Plan around = planner.PlanFrom(grid.View(), robot);
   ASSERT_FALSE(around.complete) << around.reason;
   EXPECT_GT(ClosestApproach(around, robot, ox, oy), Config().robot_radius_m);
+  // A restarted explorer loads the obstacle with its state and plans around it the same way.
+  proto::ExplorerState saved;
+  ASSERT_TRUE(saved.ParseFromString(planner.ToProto().SerializeAsString()));
+  ExplorationPlanner restarted(Config());
+  restarted.LoadProto(saved);
+  EXPECT_GT(ClosestApproach(restarted.PlanFrom(grid.View(), robot), robot, ox, oy), Config().robot_radius_m);
+  saved.mutable_blocking_obstacles(0)->set_y(NAN);
+  EXPECT_THROW(ExplorationPlanner(Config()).LoadProto(saved), std::invalid_argument);
   // A pirouette looks all round: the obstacle is forgotten with it.
   planner.RecordPirouette({2.5, 3.0, 0.0});
   EXPECT_LT(ClosestApproach(planner.PlanFrom(grid.View(), robot), robot, ox, oy), 0.05);
