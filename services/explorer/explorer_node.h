@@ -16,7 +16,8 @@
 // explorer waits for a grid made after it before planning again. When no reachable unknown
 // remains it sends STOP and reports EXPLORATION_COMPLETE. When the service stops (SIGTERM) with
 // a command outstanding, it sends STOP and reports EXPLORATION_STOPPED. The planner state (goals set aside,
-// blocked counts, obstacles found by refused moves, last pirouette) and the command numbering persist in <state_dir>/explorer.pb.
+// blocked counts, obstacles found by refused moves, last pirouette) and the command numbering
+// persist in <state_dir>/explorer.pb.
 
 #include <memory>
 #include <vector>
