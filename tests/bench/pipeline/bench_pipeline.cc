@@ -1,5 +1,7 @@
-// bench_pipeline: the RatSLAM services as separate processes on loopback DDS, fed 640x480 grey
-// frames by this process (standing in for rslam-camera).
+// bench_pipeline: the six services behind the camera (odometry, templates, pose cells, experience
+// map, occupancy, explorer) as separate processes on loopback DDS, fed 640x480 grey frames by this
+// process (standing in for rslam-camera). Frames and map poses are counted on the RatSLAM chain;
+// occupancy and explorer read the same frames and poses alongside, as they do in a deployment.
 //   - throughput: frames pushed as fast as the pipeline takes them, losing none (at most
 //     kWindow frames in flight between camera/image and experience_map/pose);
 //   - latency: frames at 10 Hz, time from publishing camera/image to the experience map's
@@ -73,7 +75,7 @@ class Pipeline {
     const std::string preset = RSLAM_SOURCE_DIR "/deploy/presets/stlucia.yaml";
     log_dir_ = std::filesystem::temp_directory_path() / ("rslam-bench-pipeline-" + std::to_string(::getpid()));
     std::filesystem::create_directories(log_dir_);
-    for (const char* service : {"odometry", "templates", "pose-cells", "experience-map"}) {
+    for (const char* service : {"odometry", "templates", "pose-cells", "experience-map", "occupancy", "explorer"}) {
       launch::ProcessSpec spec;
       spec.name = service;
       spec.executable = bin + "rslam-" + service;
@@ -172,7 +174,7 @@ void BM_PipelineThroughput(benchmark::State& state) {
     total += kFrames;
   }
   state.SetItemsProcessed(static_cast<int64_t>(total));
-  state.SetLabel(std::string(Vendor(state)) + ", 640x480 mono8, odometry+templates+pose cells+experience map");
+  state.SetLabel(std::string(Vendor(state)) + ", 640x480 mono8, six services");
 }
 
 void BM_PipelineLatency10Hz(benchmark::State& state) {
