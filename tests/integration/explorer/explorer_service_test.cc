@@ -13,6 +13,8 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
+#include "common/persistence/state_file.h"
+#include "services/explorer/proto/explorer_node_state.pb.h"
 #include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
@@ -294,6 +296,37 @@ TEST_F(ExplorerServiceTest, StoppingCancelsTheCommandAndRestartKeepsNumberingUpw
   const auto command = NextCommand();
   ASSERT_TRUE(command) << restarted->Output();
   EXPECT_GT(command->command_seq, first_run_seq);
+}
+
+TEST_F(ExplorerServiceTest, RestartAfterSigkillContinuesFromTheLastPeriodicSave) {
+  const std::string state_file = (state_dir_.path() / "explorer.pb").string();
+  uint64_t first_seq = 0;
+  {
+    auto service = Start({"--set", "service.state_save_period_s=0.2"});
+    pose_pub_->Publish(RobotAt(0, 0, 0));
+    grid_pub_->Publish(PartlyExploredGrid());
+    const auto command = NextCommand();
+    ASSERT_TRUE(command) << service->Output();
+    first_seq = command->command_seq;
+    // A periodic save holds the command (never a shutdown save: the process is killed).
+    ASSERT_TRUE(WaitFor([&] {
+      explorer::proto::ExplorerNodeState saved;
+      try {
+        ReadStateFile(state_file, "rslam.explorer.ExplorerNodeState", 1, saved);
+      } catch (const StateFileError&) {
+        return false;  // not written yet
+      }
+      return saved.last_command_seq() >= first_seq;
+    }, 5s)) << service->Output();
+    service->Signal(SIGKILL);
+    ASSERT_TRUE(service->WaitExit(10s)) << service->Output();
+  }
+  auto restarted = Start();
+  pose_pub_->Publish(RobotAt(0, 0, 0));  // the grid comes again from the state topic
+  const auto command = NextCommand();
+  ASSERT_TRUE(command) << restarted->Output();
+  EXPECT_GT(command->command_seq, first_seq) << restarted->Output();
+  EXPECT_NE(restarted->Output().find("loaded explorer state"), std::string::npos) << restarted->Output();
 }
 
 TEST(ExplorerServiceCommandLineTest, HelpListsConfigKeys) {
