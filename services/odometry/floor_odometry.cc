@@ -1,5 +1,6 @@
 #include "services/odometry/floor_odometry.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -34,10 +35,19 @@ FloorOdometry::FloorOdometry(FloorOdometryConfig config) : config_(std::move(con
 void FloorOdometry::Reset() {
   has_key_ = false;
   last_registered_ = false;
-  last_moving_dx_ = 0.0;
+  moving_dx_count_ = 0;
   frames_since_moving_dx_ = -1;
+  was_moving_ = false;
+  still_run_ = 0;
   key_ = BoundaryScan{};
   key_to_robot_.setZero();
+}
+
+double FloorOdometry::CoastStep() const {
+  const int n = static_cast<int>(std::min<uint64_t>(moving_dx_count_, kCoastSteps));
+  std::array<double, kCoastSteps> steps = moving_dx_;
+  std::nth_element(steps.begin(), steps.begin() + n / 2, steps.begin() + n);
+  return steps[n / 2];
 }
 
 void FloorOdometry::MakeKeyFrame(std::vector<Eigen::Vector2d>&& points) {
@@ -61,11 +71,20 @@ Alignment FloorOdometry::Register(std::span<const Eigen::Vector2d> points, const
 PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, const PlanarMotion& given_prior) {
   if (!std::isfinite(given_prior.dx) || !std::isfinite(given_prior.dy) || !std::isfinite(given_prior.dtheta))
     throw std::invalid_argument("FloorOdometry: the prior motion is not finite");
-  const bool moving = given_prior.dx != 0.0;
+  const bool straight = std::abs(given_prior.dtheta) < config_.straight_max_turn_rad;
+  bool moving = given_prior.dx != 0.0;
+  if (moving) {
+    still_run_ = 0;
+  } else if (was_moving_ && straight && still_run_ < config_.coast_still_frames) {
+    moving = true;
+    ++still_run_;
+  }
+  was_moving_ = moving && straight;
   PlanarMotion prior = given_prior;
   if (frames_since_moving_dx_ >= 0) ++frames_since_moving_dx_;
-  if (moving && frames_since_moving_dx_ >= 0 && frames_since_moving_dx_ <= config_.coast_frames)
-    prior.dx = last_moving_dx_;
+  const bool can_coast = frames_since_moving_dx_ >= 0 && frames_since_moving_dx_ <= config_.coast_frames;
+  const double coast_dx = frames_since_moving_dx_ >= 0 ? CoastStep() : 0.0;
+  if (moving && straight && can_coast) prior.dx = coast_dx;
   std::vector<Eigen::Vector2d> points;
   points.reserve(boundary.size());
   for (const Eigen::Vector2d& p : boundary) {
@@ -87,9 +106,9 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
   // robot drives (a plain wall ahead looks the same from a little closer).
   std::vector<PlanarMotion> seeds = {prior};
   if (last_registered_) seeds.push_back(last_motion_);
-  if (frames_since_moving_dx_ >= 0 && prior.dx != last_moving_dx_) {  // a seed may be any age
+  if (frames_since_moving_dx_ >= 0 && prior.dx != coast_dx) {  // a seed may be any age
     PlanarMotion driving_on = prior;
-    driving_on.dx = last_moving_dx_;
+    driving_on.dx = coast_dx;
     seeds.push_back(driving_on);
   }
   Alignment best;
@@ -112,8 +131,12 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
     out.pairs = best.pairs;
     key_to_robot_ = best.pose;
     last_motion_ = out;
-    if (moving) {
-      last_moving_dx_ = out.dx;
+    // A still prior taken as moving that registers standing still ends the motion.
+    if (still_run_ > 0 && std::abs(out.dx) < 0.5 * coast_dx) was_moving_ = false;
+    // The speed comes from frames the prior itself calls moving, straight (a turn's step is no speed).
+    if (given_prior.dx != 0.0 && std::abs(out.dtheta) < config_.straight_max_turn_rad) {
+      moving_dx_[moving_dx_count_ % kCoastSteps] = out.dx;
+      ++moving_dx_count_;
       frames_since_moving_dx_ = 0;
     }
   } else {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <span>
 #include <vector>
 
 #include "services/occupancy/obstacle_profile_pipeline.h"
@@ -90,23 +91,70 @@ TEST(FloorOdometryTest, ParallelWallsLeaveTheMotionToThePrior) {
   EXPECT_DOUBLE_EQ(m.dx, 0.02);
 }
 
-TEST(FloorOdometryTest, CoastsAtTheLastRegisteredSpeedWhileThePriorSaysMoving) {
-  FloorOdometry odometry(Config());
-  double x = -0.2;
+// Drives straight along x in the box room with a prior that says "moving" (the column profiles
+// see motion, not its speed), registering each step; returns the robot's final x.
+double DriveRegistered(FloorOdometry& odometry, double x, std::span<const double> steps) {
   PlanarMotion moving;
-  moving.dx = 0.001;  // the column profiles see motion, not its speed
-  odometry.Update(BoxRoomView(x, 0.0, 0.0, 1.5, 1.0), moving);
-  for (int i = 0; i < 5; ++i) {
-    x += 0.03;
-    ASSERT_TRUE(odometry.Update(BoxRoomView(x, 0.0, 0.0, 1.5, 1.0), moving).measured);
+  moving.dx = 0.001;
+  for (double step : steps) {
+    x += step;
+    EXPECT_TRUE(odometry.Update(BoxRoomView(x, 0.0, 0.0, 1.5, 1.0), moving).measured) << "step " << step;
   }
-  // Nothing to register (no points): the last registered step stands in while moving ...
+  return x;
+}
+
+TEST(FloorOdometryTest, CoastsAtTheRegisteredSpeedWhileMovingAndThroughAShortStillSpell) {
+  FloorOdometry odometry(Config());  // coast_still_frames 2
+  PlanarMotion moving;
+  moving.dx = 0.001;
+  odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
+  const std::vector<double> steps(5, 0.03);
+  DriveRegistered(odometry, -0.2, steps);
+  // Nothing to register (no points): the registered speed stands in while the prior says moving ...
   const std::vector<Eigen::Vector2d> none;
   const PlanarMotion coasting = odometry.Update(none, moving);
   EXPECT_FALSE(coasting.measured);
   EXPECT_NEAR(coasting.dx, 0.03, 1e-3);
-  // ... and not once the prior says the robot stopped.
+  // ... and for two frames the prior calls still (no turn) right after moving ones, then not.
+  EXPECT_NEAR(odometry.Update(none, {}).dx, 0.03, 1e-3);
+  EXPECT_NEAR(odometry.Update(none, {}).dx, 0.03, 1e-3);
   EXPECT_DOUBLE_EQ(odometry.Update(none, {}).dx, 0.0);
+  // A still prior after a turning frame is a stop.
+  PlanarMotion turning = moving;
+  turning.dtheta = 0.05;
+  odometry.Update(none, moving);
+  odometry.Update(none, turning);
+  EXPECT_DOUBLE_EQ(odometry.Update(none, {}).dx, 0.0);
+}
+
+TEST(FloorOdometryTest, OneOddRegisteredStepDoesNotSetTheCoastingSpeed) {
+  FloorOdometry odometry(Config());
+  PlanarMotion moving;
+  moving.dx = 0.001;
+  odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
+  const std::vector<double> steps = {0.03, 0.03, 0.03, 0.03, 0.06};  // the last registers 0.06
+  DriveRegistered(odometry, -0.2, steps);
+  const std::vector<Eigen::Vector2d> none;
+  EXPECT_NEAR(odometry.Update(none, moving).dx, 0.03, 1e-3);  // the median, not the latest
+}
+
+TEST(FloorOdometryTest, ATurnsRegisteredStepsDoNotSetTheCoastingSpeed) {
+  FloorOdometry odometry(Config());
+  PlanarMotion moving;
+  moving.dx = 0.001;
+  odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
+  const std::vector<double> steps(4, 0.03);
+  const double x = DriveRegistered(odometry, -0.2, steps);
+  // Five frames turning on the spot that the profiles also call moving: registered, no forward step.
+  PlanarMotion turning = moving;
+  turning.dtheta = 0.02;
+  for (int i = 1; i <= 5; ++i) {
+    const PlanarMotion m = odometry.Update(BoxRoomView(x, 0.0, 0.02 * i, 1.5, 1.0), turning);
+    ASSERT_TRUE(m.measured);
+    EXPECT_NEAR(m.dx, 0.0, 2e-3);
+  }
+  const std::vector<Eigen::Vector2d> none;
+  EXPECT_NEAR(odometry.Update(none, moving).dx, 0.03, 1e-3);
 }
 
 TEST(FloorOdometryTest, TooFewPointsOrBadInputAreHandled) {
