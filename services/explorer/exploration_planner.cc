@@ -84,6 +84,22 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
                  " times");
 }
 
+void ExplorationPlanner::ReportBump(const Plan& plan, const Pose2D& at, bool backwards) {
+  if (!IsFinite(at)) throw std::invalid_argument("bump pose is not finite");
+  const double r = config_.robot_radius_m, heading = at.theta + (backwards ? M_PI : 0.0);
+  ReportBlocked(plan, std::pair{at.x + r * std::cos(heading), at.y + r * std::sin(heading)});
+}
+
+bool ExplorationPlanner::PassesBlockingObstacle(const Pose2D& from, double distance_m) const {
+  const double dx = distance_m * std::cos(from.theta), dy = distance_m * std::sin(from.theta);
+  const double len2 = dx * dx + dy * dy;
+  return std::any_of(blocking_obstacles_.begin(), blocking_obstacles_.end(), [&](const auto& o) {
+    const double ox = o.first - from.x, oy = o.second - from.y;
+    const double t = len2 > 0 ? std::clamp((ox * dx + oy * dy) / len2, 0.0, 1.0) : 0.0;
+    return std::hypot(ox - t * dx, oy - t * dy) < config_.robot_radius_m;
+  });
+}
+
 Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
   if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
   const CoarseGrid cs = BuildConfigurationSpace(occupancy, config_);
@@ -188,7 +204,8 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     // than the robot already is (it stands off-centre beside a wall): then straight on.
     if (off_centre > 0.25 * cs.cell_size_m) {
       const double to_centre = std::atan2(cs.CentreY(ry) - robot.y, cs.CentreX(rx) - robot.x);
-      if (IsPathClear(occupancy, {robot.x, robot.y, to_centre}, off_centre))
+      const Pose2D step{robot.x, robot.y, to_centre};
+      if (IsPathClear(occupancy, step, off_centre) && !PassesBlockingObstacle(step, off_centre))
         waypoints.emplace_back(cs.CentreX(rx), cs.CentreY(ry));
     }
     for (size_t i = 1; i < path.size(); ++i) {

@@ -77,6 +77,14 @@ class ExplorationPlanner {
   // classed by the grid cells inside them) can send every goal through the same gap the exact
   // check refuses, and each goal is set aside in turn until exploration calls itself complete.
   void ReportBlocked(const Plan& plan, std::optional<std::pair<double, double>> obstacle = std::nullopt);
+  // The base stopped a straight move of this plan (forwards, or backwards when `backwards`) at
+  // `at`: something the map does not show is in contact (the camera cannot see the floor
+  // boundary closer than its blind range). ReportBlocked with the obstacle one robot radius
+  // ahead. Plans keep every move off such obstacles, including their first step to the centre
+  // of the robot's cell: that step used to bump into the same wall again and again, which set
+  // aside goal after goal until exploration called itself complete with a third of the room
+  // unseen (a demo run: 61 goals in 11 s, coverage 0.37).
+  void ReportBump(const Plan& plan, const Pose2D& at, bool backwards);
 
   const std::vector<SetAsideGoal>& set_aside_goals() const { return set_aside_; }
 
@@ -87,6 +95,9 @@ class ExplorationPlanner {
 
  private:
   void SetAside(int x, int y, std::string reason);
+  // True when the straight segment from `from` along its heading for distance_m passes within the
+  // robot radius of an obstacle reported since the last pirouette.
+  bool PassesBlockingObstacle(const Pose2D& from, double distance_m) const;
   bool IsSetAside(int x, int y) const;
 
   const ExplorerConfig config_;

@@ -193,15 +193,12 @@ class ExplorerNode::Controller {
         return;
       }
       case msg::MotionState::MOTION_BLOCKED: {
-        // A blocked straight move bumped into something the map does not show: just ahead.
-        std::optional<std::pair<double, double>> bump;
-        if (awaiting_->command.kind == MotionCommand::Kind::kMove && pose_) {
-          const Pose2D at = RobotPose();
-          const double ahead = std::copysign(config_.planner.robot_radius_m, awaiting_->command.distance_m);
-          bump = std::pair{at.x + ahead * std::cos(at.theta), at.y + ahead * std::sin(at.theta)};
-        }
+        // A blocked straight move bumped into something the map does not show (ReportBump).
+        const bool bumped = awaiting_->command.kind == MotionCommand::Kind::kMove && pose_;
+        const bool backwards = awaiting_->command.distance_m < 0;
         awaiting_.reset();
-        if (plan_) planner_.ReportBlocked(*plan_, bump);
+        if (plan_ && bumped) planner_.ReportBump(*plan_, RobotPose(), backwards);
+        else if (plan_) planner_.ReportBlocked(*plan_);
         plan_.reset();
         reason_ = "the base reported command " + std::to_string(feedback.command_seq) + " blocked";
         NoteSetAside();

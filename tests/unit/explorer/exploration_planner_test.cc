@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace rslam::explorer {
 namespace {
@@ -253,6 +254,42 @@ TEST(ExplorationPlannerTest, ABlockedMoveSendsTheNextPlanAroundTheObstacleUntilT
   // A pirouette looks all round: the obstacle is forgotten with it.
   planner.RecordPirouette({2.5, 3.0, 0.0});
   EXPECT_LT(ClosestApproach(planner.PlanFrom(grid.View(), robot), robot, ox, oy), 0.05);
+}
+
+
+// Heading of a plan's first straight move from `from`; none without one.
+std::optional<double> FirstMoveHeading(const Plan& plan, Pose2D from) {
+  for (const MotionCommand& c : plan.commands) {
+    if (c.kind == Kind::kRotate) from.theta += c.angle_rad;
+    if (c.kind == Kind::kMove) return c.distance_m >= 0 ? from.theta : from.theta + M_PI;
+  }
+  return std::nullopt;
+}
+
+TEST(ExplorationPlannerTest, ABumpTurnsTheNextPlansAwayFromTheWallAhead) {
+  // The map shows free floor east of the robot and unknown space beyond; the robot stands 3 cm
+  // west of its cell's centre, facing east, and the plan starts with that step east.
+  TestGrid grid(60, 40, 0);
+  for (int y = 1; y < 39; ++y)
+    for (int x = 50; x < 59; ++x) grid.Set(x, y, -1);
+  ExplorerConfig config = Config();
+  config.robot_radius_m = 0.1;  // as in the demo, one exploration cell
+  ExplorationPlanner planner(config);
+  const Pose2D robot{0.52, 1.05, 0.0};
+  const Plan first = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(first.complete) << first.reason;
+  ASSERT_TRUE(FirstMoveHeading(first, robot).has_value());
+  ASSERT_NEAR(std::cos(*FirstMoveHeading(first, robot)), 1.0, 1e-9);
+  // The base stops that step: a wall the map does not show. The next plan turns at least 60
+  // degrees away from the bumped direction before it moves (it used to step east again).
+  planner.ReportBump(first, robot, false);
+  const Plan next = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(next.complete) << next.reason;
+  const std::optional<double> heading = FirstMoveHeading(next, robot);
+  ASSERT_TRUE(heading.has_value());
+  EXPECT_LT(std::cos(*heading), 0.5) << "first move heads " << *heading << " rad";
+  EXPECT_TRUE(planner.set_aside_goals().empty());
+  EXPECT_THROW(planner.ReportBump(first, {NAN, 0.0, 0.0}, false), std::invalid_argument);
 }
 
 }  // namespace
