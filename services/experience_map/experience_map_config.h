@@ -25,6 +25,13 @@ struct ExperienceMapConfig {
   // A recognised heading is only as good as the view's shift match (about 1 degree a pixel) and
   // the experience's own facing; a blend keeps most of the drift correction and less noise.
   double exp_heading_correction = 1.0;
+  // On recognising an experience, the share of the way from the dead-reckoned position to the
+  // experience's the robot's position takes; the rest stays as an offset from the experience
+  // (it moves with the experience when the map is corrected). 1 = OpenRatSLAM (the robot is put
+  // on the experience: each recognition adds the view's position tolerance, up to the pose-cell
+  // match radius, to the map). The link's correction of the map is unchanged; below about 0.2
+  // the map no longer holds together (a dead-reckoned robot keeps pulling it apart).
+  double exp_position_correction = 1.0;
 
   template <class V>
   void VisitFields(V& v) {
@@ -41,6 +48,8 @@ struct ExperienceMapConfig {
       "average re-traversals into the existing link (000 eq. 2)");
     v("exp_heading_correction", exp_heading_correction,
       "on recognition, the share of the heading difference taken from the experience (1 = OpenRatSLAM, 0 = none)");
+    v("exp_position_correction", exp_position_correction,
+      "on recognition, the share of the way from the dead-reckoned position to the experience's (1 = OpenRatSLAM)");
   }
 
   void Validate() const {
@@ -52,6 +61,7 @@ struct ExperienceMapConfig {
     Require(exp_local_region_links >= 0, "exp_local_region_links", "must be non-negative");
     Require(exp_relax_tolerance >= 0, "exp_relax_tolerance", "must be non-negative");
     Require(exp_heading_correction >= 0 && exp_heading_correction <= 1, "exp_heading_correction", "must be in [0, 1]");
+    Require(exp_position_correction > 0 && exp_position_correction <= 1, "exp_position_correction", "must be in (0, 1]");
   }
 };
 

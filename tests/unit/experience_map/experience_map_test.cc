@@ -161,6 +161,35 @@ TEST(ExperienceMap, RecognitionTakesTheConfiguredShareOfTheHeadingDifference) {
   EXPECT_NEAR(std::abs(HeadingAfterRecognising(0.5, 3.1, -3.1 - kPi / 2)), kPi, 1e-9);
 }
 
+// Experience 0 at the origin, experience 1 two metres east; the robot drives back 1.7 m west
+// (dead reckoned at x = 0.3) and recognises experience 0. No map correction.
+Pose2 PoseAfterRecognising(double position_correction) {
+  ExperienceMapConfig config = NoCorrection();
+  config.exp_position_correction = position_correction;
+  ExperienceMap map(config);
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(0.0, -kPi / 2, 1.0);  // exp 0 faces +y: turn to +x ...
+  map.Integrate(2.0, 0.0, 1.0);       // ... and drive 2 m
+  map.Apply(Create(1, 0));
+  map.Integrate(0.0, kPi, 1.0);
+  map.Integrate(1.7, 0.0, 1.0);
+  map.Apply(LinkTo(Kind::kLink, 1, 0));
+  EXPECT_EQ(map.current_id(), 0u);
+  return map.RobotPose();
+}
+
+TEST(ExperienceMap, RecognitionTakesTheConfiguredShareOfThePositionDifference) {
+  const Pose2 on = PoseAfterRecognising(1.0);  // OpenRatSLAM: on the experience
+  EXPECT_NEAR(on.x_m, 0.0, 1e-9);
+  EXPECT_NEAR(on.y_m, 0.0, 1e-9);
+  const Pose2 part = PoseAfterRecognising(0.4);  // 0.4 of the way from x = 0.3 to 0
+  EXPECT_NEAR(part.x_m, 0.18, 1e-9);
+  EXPECT_NEAR(part.y_m, 0.0, 1e-9);
+  ExperienceMapConfig config;
+  config.exp_position_correction = 0.0;
+  EXPECT_THROW(config.Validate(), ConfigError);
+}
+
 TEST(ExperienceMap, HeadingCorrectionOutsideZeroToOneIsRefused) {
   ExperienceMapConfig config;
   config.exp_heading_correction = 1.5;
