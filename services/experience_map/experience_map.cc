@@ -189,17 +189,16 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         }
       }
       if (changed) SeedLocalRegion(current_, to);
-      const double dead_reckoned = accum_facing_;
-      const Pose2 dead_reckoned_pose = RobotPose();
+      const Pose2 dead_reckoned = RobotPose();
       SetCurrent(to, a.relative_angle_rad);
       if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
-        accum_facing_ =
-            ClipAngle(dead_reckoned + config_.exp_heading_correction * ClipAngle(accum_facing_ - dead_reckoned));
+        accum_facing_ = ClipAngle(dead_reckoned.th_rad +
+                                  config_.exp_heading_correction * ClipAngle(accum_facing_ - dead_reckoned.th_rad));
       }
       if (config_.exp_position_correction < 1.0) {  // at 1 the robot is on the experience (OpenRatSLAM)
         const double keep = 1.0 - config_.exp_position_correction;
-        accum_x_ = keep * (dead_reckoned_pose.x_m - experiences_[to].x_m);
-        accum_y_ = keep * (dead_reckoned_pose.y_m - experiences_[to].y_m);
+        accum_x_ = keep * (dead_reckoned.x_m - experiences_[to].x_m);
+        accum_y_ = keep * (dead_reckoned.y_m - experiences_[to].y_m);
       }
       break;
     }

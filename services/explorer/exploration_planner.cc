@@ -13,6 +13,13 @@ namespace {
 bool IsFinite(const Pose2D& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
 double NormalizeAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
 
+// Distance from (px, py) to the segment from (x0, y0) along (sx, sy).
+double DistanceToSegment(double px, double py, double x0, double y0, double sx, double sy) {
+  const double len2 = sx * sx + sy * sy;
+  const double t = len2 > 0 ? std::clamp(((px - x0) * sx + (py - y0) * sy) / len2, 0.0, 1.0) : 0.0;
+  return std::hypot(px - (x0 + t * sx), py - (y0 + t * sy));
+}
+
 constexpr int kNeighbourDx[8] = {1, 0, -1, 0, 1, -1, -1, 1};
 constexpr int kNeighbourDy[8] = {0, 1, 0, -1, 1, 1, -1, -1};
 
@@ -92,11 +99,8 @@ void ExplorationPlanner::ReportBump(const Plan& plan, const Pose2D& at, bool bac
 
 bool ExplorationPlanner::PassesBlockingObstacle(const Pose2D& from, double distance_m) const {
   const double dx = distance_m * std::cos(from.theta), dy = distance_m * std::sin(from.theta);
-  const double len2 = dx * dx + dy * dy;
   return std::any_of(blocking_obstacles_.begin(), blocking_obstacles_.end(), [&](const auto& o) {
-    const double ox = o.first - from.x, oy = o.second - from.y;
-    const double t = len2 > 0 ? std::clamp((ox * dx + oy * dy) / len2, 0.0, 1.0) : 0.0;
-    return std::hypot(ox - t * dx, oy - t * dy) < config_.robot_radius_m;
+    return DistanceToSegment(o.first, o.second, from.x, from.y, dx, dy) < config_.robot_radius_m;
   });
 }
 
@@ -251,7 +255,7 @@ std::optional<std::pair<double, double>> ExplorationPlanner::ObstacleOnPath(cons
   const int cx_max = static_cast<int>(std::floor((std::max(x0, x1) + r - occupancy.origin_x_m) / res));
   const int cy_min = static_cast<int>(std::floor((std::min(y0, y1) - r - occupancy.origin_y_m) / res));
   const int cy_max = static_cast<int>(std::floor((std::max(y0, y1) + r - occupancy.origin_y_m) / res));
-  const double sx = x1 - x0, sy = y1 - y0, len2 = sx * sx + sy * sy;
+  const double sx = x1 - x0, sy = y1 - y0;
   auto blocking = [&](int cx, int cy) {
     return cx < 0 || cy < 0 || cx >= occupancy.width || cy >= occupancy.height ||
            occupancy.ClassAt(cx, cy) == CellClass::kOccupied;
@@ -272,8 +276,7 @@ std::optional<std::pair<double, double>> ExplorationPlanner::ObstacleOnPath(cons
     for (int cx = cx_min; cx <= cx_max; ++cx) {
       if (!blocking(cx, cy)) continue;
       const auto [px, py] = centre(cx, cy);
-      const double t = len2 > 0 ? std::clamp(((px - x0) * sx + (py - y0) * sy) / len2, 0.0, 1.0) : 0.0;
-      const double d = std::hypot(px - (x0 + t * sx), py - (y0 + t * sy));
+      const double d = DistanceToSegment(px, py, x0, y0, sx, sy);
       if (d <= r && d < start_clearance - 1e-9) return std::pair{px, py};
     }
   }

@@ -24,9 +24,10 @@
 // not how fast): while it does, the forward step seeded into the registration, and returned when a
 // frame cannot be registered, is the median of the last kCoastSteps registered forward steps of
 // straight frames the prior calls moving (constant velocity; one odd registration, or a turn's
-// step, does not set the speed) if the newest is at most coast_frames old, else the prior's own. A still prior (dx 0)
-// that does not turn, right after moving frames, is taken as moving for up to coast_still_frames
-// frames unless a registration measures the robot standing: driving straight past a plain wall,
+// step, does not set the speed) if the newest is at most coast_frames old, else the prior's own.
+// A still prior (dx 0) that does not turn, right after moving frames, is taken as moving for up
+// to coast_still_frames frames unless a registration measures the robot standing (less than
+// half the coasting step): driving straight past a plain wall,
 // the column profiles can change less than their noise floor for a frame or two (on a demo path,
 // 360 of 3,199 moving frames read dx 0 and were not registered: 8.9 m of 79.7 m lost).
 // A frame is not registered (the seeded prior is returned, measured = false) when

@@ -256,7 +256,6 @@ TEST(ExplorationPlannerTest, ABlockedMoveSendsTheNextPlanAroundTheObstacleUntilT
   EXPECT_LT(ClosestApproach(planner.PlanFrom(grid.View(), robot), robot, ox, oy), 0.05);
 }
 
-
 // Heading of a plan's first straight move from `from`; none without one.
 std::optional<double> FirstMoveHeading(const Plan& plan, Pose2D from) {
   for (const MotionCommand& c : plan.commands) {
