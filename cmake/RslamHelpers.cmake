@@ -17,11 +17,13 @@ function(rslam_add_subdirectories dir)
 endfunction()
 
 # rslam_add_test(NAME name SOURCES a.cc ... LIBS lib ... [LABELS unit|integration|system ...]
-#                [TIMEOUT seconds])
+#                [TIMEOUT seconds] [RESOURCE_LOCK name])
 # One GoogleTest binary in build/bin, each TEST() registered with ctest on its own so ctest -j
 # runs them in parallel. Tests get RSLAM_SOURCE_DIR and RSLAM_SHARED_DATA in their environment.
+# Tests that hold the same RESOURCE_LOCK never run at the same time (whole pipelines of
+# processes: two of them at once overload 2 cores, and a camera at a set rate then loses frames).
 function(rslam_add_test)
-  cmake_parse_arguments(T "" "NAME;TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(T "" "NAME;TIMEOUT;RESOURCE_LOCK" "SOURCES;LIBS;LABELS" ${ARGN})
   if(NOT RSLAM_BUILD_TESTS)
     return()
   endif()
@@ -36,9 +38,13 @@ function(rslam_add_test)
   target_compile_definitions(${T_NAME} PRIVATE
     RSLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     RSLAM_BINARY_DIR="${PROJECT_BINARY_DIR}")
+  set(lock "")
+  if(T_RESOURCE_LOCK)
+    set(lock RESOURCE_LOCK ${T_RESOURCE_LOCK})
+  endif()
   gtest_discover_tests(${T_NAME}
     DISCOVERY_TIMEOUT 60
-    PROPERTIES LABELS "${T_LABELS}" TIMEOUT ${T_TIMEOUT}
+    PROPERTIES LABELS "${T_LABELS}" TIMEOUT ${T_TIMEOUT} ${lock}
                ENVIRONMENT "RSLAM_SHARED_DATA=${PROJECT_SOURCE_DIR}/../shared/data")
 endfunction()
 
