@@ -156,7 +156,12 @@ class CameraNode::Impl {
     const ServiceLinkWatch links(context_.participant());
     std::vector<std::string> missing;
     const auto ready = [&] {
-      missing = links.Unmatched(config_.wait_for_services);
+      // With services named, the camera's own heartbeat must be among them, so that theirs are
+      // checked against its writer: a writer-side match alone says nothing about the reader's side,
+      // and a volatile reader drops what arrives before it knows the writer.
+      missing = links.Unmatched(config_.wait_for_services,
+                                config_.wait_for_services.empty() ? std::vector<std::string>{}
+                                                                  : std::vector<std::string>{std::string(bus::topics::kCameraImage.name)});
       return publisher_->MatchedSubscribers() >= config_.wait_for_readers && missing.empty();
     };
     while (!ready()) {

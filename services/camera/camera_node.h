@@ -8,7 +8,9 @@
 //
 // Recorded sources are stamped by the source (deterministic). rate_hz > 0 paces them in real
 // time; rate_hz = 0 publishes the next frame once every matched reader acknowledged the last one.
-// Before frame 0 the camera waits for wait_for_readers readers (up to its timeout). At the end
+// Before frame 0 the camera waits for wait_for_readers readers and for the heartbeats of the
+// wait_for_services to show their links, its own camera/image included, matched at both ends (up
+// to its timeout; at a set rate a writer-side match alone loses the first frames). At the end
 // of a finite source it logs the end and stops the process cleanly (exit 0), unless `loop`:
 // then the source starts again with frame numbers and stamps continuing upwards.
 // Start-up failures (absent device, unreadable first frame) throw: the process exits 1; a bad

@@ -102,7 +102,8 @@ void ServicePipeline::StartCamera(const CameraOptions& camera) {
   std::vector<std::string> args{"--domain", std::to_string(domain_), "--config", options_.config_file,
                                 "--dds", camera.vendor.empty() ? "cyclone" : camera.vendor};
   for (const std::string& kv : std::vector<std::string>{"source=images", "path=" + camera.folder, "fps=" + std::to_string(camera.fps),
-        "rate_hz=" + std::to_string(camera.rate_hz), "wait_for_readers=" + std::to_string(camera.readers)}) {
+        "rate_hz=" + std::to_string(camera.rate_hz), "wait_for_readers=" + std::to_string(camera.readers),
+        "wait_for_services=[odometry, templates]"}) {
     args.push_back("--set");
     args.push_back("camera." + kv);
   }

@@ -46,6 +46,17 @@ constexpr double kTolerance = 1e-9;
 
 double SecondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
+// "frames 12, 79 have no pose" for a failure message.
+std::string MissingPoses(const std::vector<msg::ExperiencePose>& poses, int frames) {
+  std::vector<bool> seen(static_cast<std::size_t>(frames), false);
+  for (const auto& pose : poses)
+    if (pose.header.frame_seq < seen.size()) seen[pose.header.frame_seq] = true;
+  std::string missing;
+  for (int i = 0; i < frames; ++i)
+    if (!seen[static_cast<std::size_t>(i)]) missing += (missing.empty() ? "" : ", ") + std::to_string(i);
+  return missing.empty() ? "" : "frames " + missing + " have no pose";
+}
+
 // What the experience map looked like after each frame.
 struct FrameState {
   uint32_t current_experience_id = 0;
@@ -157,7 +168,8 @@ class ServicesMapTest : public ::testing::Test {
     if (before_camera) before_camera(pipeline);
     pipeline.StartCamera({.folder = images, .fps = kFps, .rate_hz = rate_hz, .vendor = {}, .readers = camera_readers});
     ASSERT_TRUE(pipeline.WaitForFrames(frames, 60s))
-        << pipeline.Poses().size() << " of " << frames << " poses\n" << pipeline.Logs();
+        << pipeline.Poses().size() << " of " << frames << " poses; " << MissingPoses(pipeline.Poses(), frames) << "\n"
+        << pipeline.Logs();
     out.seconds = SecondsSince(start);
     ASSERT_EQ(pipeline.WaitCameraExit(10s), 0) << pipeline.Logs();
     if (after_frames) after_frames(pipeline);
