@@ -20,6 +20,9 @@ double DistanceToSegment(double px, double py, double x0, double y0, double sx, 
   return std::hypot(px - (x0 + t * sx), py - (y0 + t * sy));
 }
 
+// Plans made again within one PlanFrom because one of their own moves passed an obstacle.
+constexpr int kMaxReplansForBlockedMoves = 20;
+
 constexpr int kNeighbourDx[8] = {1, 0, -1, 0, 1, -1, -1, 1};
 constexpr int kNeighbourDy[8] = {0, 1, 0, -1, 1, 1, -1, -1};
 
@@ -27,7 +30,8 @@ constexpr int kNeighbourDy[8] = {0, 1, 0, -1, 1, 1, -1, -1};
 // (dilation margin allowed, unknown not) to the nearest cell with a finite transform cost; the
 // cells after the robot's, or empty when there is none within kMaxSteps cells (a robot that
 // drove in through a gap the grid has since narrowed can drive out the same way).
-std::vector<std::pair<int, int>> EscapePath(const CoarseGrid& cs, const std::vector<int32_t>& cost, int rx, int ry) {
+std::vector<std::pair<int, int>> EscapePath(const CoarseGrid& cs, const std::vector<int32_t>& cost,
+                                            const std::vector<uint8_t>& near_blocking, int rx, int ry) {
   constexpr int kMaxSteps = 25;  // 5 m at the demo's 0.2 m exploration cells
   const int w = cs.width;
   std::vector<int32_t> parent(cs.cells.size(), -1);
@@ -48,7 +52,7 @@ std::vector<std::pair<int, int>> EscapePath(const CoarseGrid& cs, const std::vec
       const int nx = x + kNeighbourDx[k], ny = y + kNeighbourDy[k];
       if (!cs.Contains(nx, ny)) continue;
       const size_t j = static_cast<size_t>(ny) * w + nx;
-      if (parent[j] >= 0 || cs.obstacle[j] || cs.cells[j] == CellClass::kUnknown) continue;
+      if (parent[j] >= 0 || cs.obstacle[j] || near_blocking[j] || cs.cells[j] == CellClass::kUnknown) continue;
       parent[j] = static_cast<int32_t>(i);
       depth[j] = depth[i] + 1;
       queue.push_back(j);
@@ -124,26 +128,36 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     traversable[i] = 0;
     goal[i] = 0;
   }
-  for (const auto& [ox, oy] : blocking_obstacles_) {
+  // Cells within the robot radius of an obstacle reported since the last pirouette (or found on
+  // a plan's own move below): neither the descent nor the escape goes through them.
+  std::vector<uint8_t> near_blocking(n, 0);
+  const auto keep_off = [&](double ox, double oy) {
     const int reach = static_cast<int>(std::ceil(config_.robot_radius_m / cs.cell_size_m));
     const int ocx = cs.CellX(ox), ocy = cs.CellY(oy);
     for (int y = ocy - reach; y <= ocy + reach; ++y)
       for (int x = ocx - reach; x <= ocx + reach; ++x)
-        if (cs.Contains(x, y) && std::hypot(cs.CentreX(x) - ox, cs.CentreY(y) - oy) <= config_.robot_radius_m)
-          traversable[static_cast<size_t>(y) * w + x] = 0;
-  }
+        if (cs.Contains(x, y) && std::hypot(cs.CentreX(x) - ox, cs.CentreY(y) - oy) <= config_.robot_radius_m) {
+          const size_t i = static_cast<size_t>(y) * w + x;
+          if (i != robot_index) traversable[i] = 0, near_blocking[i] = 1;  // the robot is where it is
+        }
+  };
+  for (const auto& [ox, oy] : blocking_obstacles_) keep_off(ox, oy);
   if (!goal[robot_index]) traversable[robot_index] = 1;  // the robot is there, whatever the map says
 
   const bool looked_here = last_pirouette_ && cs.CellX(last_pirouette_->x) == rx &&
                            cs.CellY(last_pirouette_->y) == ry;
+  int replans_left = kMaxReplansForBlockedMoves;
+  std::optional<Plan> first_blocked;  // returned if keeping off its obstacle leaves nothing to explore
   while (true) {
     const std::vector<int32_t> cost = ComputeExplorationTransform(cs.width, cs.height, traversable, goal);
     Plan plan;
     // A robot inside the dilation margin (after a pirouette beside a wall, or when the grid has
     // just marked an obstacle next to it) first steps out to the nearest cell that can reach a goal.
     const std::vector<std::pair<int, int>> escape =
-        cost[robot_index] == kUnreachable ? EscapePath(cs, cost, rx, ry) : std::vector<std::pair<int, int>>{};
+        cost[robot_index] == kUnreachable ? EscapePath(cs, cost, near_blocking, rx, ry)
+                                          : std::vector<std::pair<int, int>>{};
     if (cost[robot_index] == kUnreachable && escape.empty()) {
+      if (first_blocked) return *first_blocked;
       plan.complete = true;
       plan.commands.push_back({MotionCommand::Kind::kStop});
       plan.reason = "no reachable unknown space remains (" + std::to_string(set_aside_.size()) +
@@ -219,6 +233,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       if (run_ends) waypoints.emplace_back(cs.CentreX(path[i].first), cs.CentreY(path[i].second));
     }
     double x = robot.x, y = robot.y, theta = robot.theta;
+    std::optional<std::pair<double, double>> blocked;  // on a move of this plan
     for (const auto& [wx, wy] : waypoints) {
       const double distance = std::hypot(wx - x, wy - y);
       if (distance < 1e-9) continue;
@@ -226,15 +241,31 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       const double turn = NormalizeAngle(heading - theta);
       if (std::abs(turn) > 1e-9) plan.commands.push_back({MotionCommand::Kind::kRotate, turn, 0.0, 0});
       plan.commands.push_back({MotionCommand::Kind::kMove, 0.0, distance, 0});
+      if (!blocked) blocked = ObstacleOnPath(occupancy, {x, y, heading}, distance);
       x = wx;
       y = wy;
       theta = heading;
     }
-    plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
-                             config_.pirouette_steps});
+    // Without the closing pirouette the camera looks ahead on the way; unknown space it did not
+    // see is next door at the next plan, which pirouettes there (the branch above).
+    if (config_.pirouette_at_goal)
+      plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
+                               config_.pirouette_steps});
     plan.has_target = true;
     plan.target = {x, y, theta};
     plan.reason = "to the nearest unknown space, " + std::to_string(path.size() - 1) + " cells away";
+    // Look before you move, at planning time: a move of the plan that the caller's check would
+    // refuse (the escape through the dilation margin, or the first step from an off-centre robot,
+    // can pass closer to a wall than the robot radius) would count against goal after goal, each
+    // plan starting with the same refused move (two demo runs set aside 20 and 25 goals in under
+    // 2 s and called exploration complete at coverage 0.79 and 0.64). Keep off that obstacle
+    // and plan again.
+    if (blocked && replans_left-- > 0) {
+      if (!first_blocked) first_blocked = plan;
+      blocking_obstacles_.push_back(*blocked);
+      keep_off(blocked->first, blocked->second);
+      continue;
+    }
     return plan;
   }
 }

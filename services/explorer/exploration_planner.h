@@ -7,9 +7,11 @@
 //     be reached even so, exploration is complete;
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
-//     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees).
+//     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees;
+//     with pirouette_at_goal false, only a plan for unknown space next to the robot pirouettes).
 // "Look before you move": before each straight move the caller asks IsPathClear with the latest
-// grid and replans if it is blocked (ReportBlocked counts that against the goal). Goals that stay
+// grid and replans if it is blocked (ReportBlocked counts that against the goal). PlanFrom puts
+// its own moves to the same test and plans around one that would be refused. Goals that stay
 // unknown after the robot has looked at them from next door, or that keep being blocked, are set
 // aside with a reason, so exploration always ends.
 

@@ -12,6 +12,7 @@ struct ExplorerConfig {
   int coarse_cell_factor = 4;         // exploration cell = factor x occupancy cell
   int min_unknown_cells_for_goal = 1; // occupancy cells unknown in a coarse cell to make it a goal
   int pirouette_steps = 12;           // paper 003: 12 x 30 degrees
+  bool pirouette_at_goal = true;      // paper 003: every plan ends with a pirouette
   int max_blocked_attempts = 3;       // look-before-you-move failures before a goal is set aside
 
   template <class V>
@@ -21,6 +22,8 @@ struct ExplorerConfig {
     v("min_unknown_cells_for_goal", min_unknown_cells_for_goal,
       "unknown occupancy cells needed to make an exploration cell a goal");
     v("pirouette_steps", pirouette_steps, "rotations of one pirouette (360 / steps degrees each)");
+    v("pirouette_at_goal", pirouette_at_goal,
+      "end every plan with a pirouette (paper 003); false: only where unknown space is still next to the robot");
     v("max_blocked_attempts", max_blocked_attempts,
       "blocked moves towards one goal before it is set aside");
   }

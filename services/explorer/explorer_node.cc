@@ -185,10 +185,11 @@ class ExplorerNode::Controller {
         awaiting_.reset();
         expected_pose_ = Apply(expected_pose_, done);
         ++next_command_;
-        if (done.kind == MotionCommand::Kind::kPirouette) {
-          if (pose_) planner_.RecordPirouette(RobotPose());
+        if (done.kind == MotionCommand::Kind::kPirouette && pose_) planner_.RecordPirouette(RobotPose());
+        // The next plan needs the grid of what the robot just saw: after a pirouette, and after
+        // the last move of a plan that ends without one (pirouette_at_goal false).
+        if (done.kind == MotionCommand::Kind::kPirouette || (plan_ && next_command_ >= plan_->commands.size()))
           WaitForFreshGrid();
-        }
         Step();
         return;
       }

@@ -79,6 +79,76 @@ TEST(ExplorationPlannerTest, StraightCorridorBecomesOneTurnAndOneMove) {
   EXPECT_EQ(plan.goal_x, 25);
 }
 
+TEST(ExplorationPlannerTest, WithoutPirouetteAtGoalOnlyUnknownSpaceNextToTheRobotIsLookedAt) {
+  TestGrid grid(60, 12, 0);
+  for (int y = 1; y < 11; ++y)
+    for (int x = 50; x < 59; ++x) grid.Set(x, y, -1);
+  ExplorerConfig config = Config();
+  config.pirouette_at_goal = false;
+  ExplorationPlanner planner(config);
+  const Plan plan = planner.PlanFrom(grid.View(), {0.35, 0.35, M_PI / 2});
+  ASSERT_EQ(plan.commands.size(), 2u);  // turn, move: the camera looks ahead on the way
+  EXPECT_EQ(plan.commands[0].kind, Kind::kRotate);
+  EXPECT_EQ(plan.commands[1].kind, Kind::kMove);
+  EXPECT_NEAR(plan.commands[1].distance_m, 2.1, 1e-9);
+  // Arrived with the unknown still next door (the camera's blind range): now it looks around.
+  const Plan there = planner.PlanFrom(grid.View(), plan.target);
+  ASSERT_EQ(there.commands.size(), 1u);
+  EXPECT_EQ(there.commands[0].kind, Kind::kPirouette);
+  // Seen on the way: the next plan goes on to what is still unknown, without a pirouette.
+  for (int y = 1; y < 11; ++y)
+    for (int x = 50; x < 54; ++x) grid.Set(x, y, 0);
+  const Plan on = planner.PlanFrom(grid.View(), plan.target);
+  ASSERT_FALSE(on.commands.empty());
+  EXPECT_EQ(on.commands.back().kind, Kind::kMove);
+  EXPECT_GT(on.target.x, plan.target.x);
+}
+
+// The moves of a plan pass the caller's look-before-you-move check (ObstacleOnPath from where
+// each move starts), so plans rarely begin with a move that is refused and counted against their
+// goal. Rooms with scattered posts and unknown patches, robots at random free points: before
+// plans were checked when made, 19 of 170 plans had a refused move; now 4 (where keeping the
+// cell centres off an obstacle does not keep an off-centre segment off it).
+TEST(ExplorationPlannerTest, MovesOfAPlanPassLookBeforeYouMove) {
+  uint32_t state = 12345;
+  const auto next = [&](int n) {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<int>((state >> 8) % static_cast<uint32_t>(n));
+  };
+  int plans_with_moves = 0, refused = 0;
+  for (int world = 0; world < 200; ++world) {
+    TestGrid grid(60, 60, 0);
+    for (int k = 0; k < 25; ++k) grid.Set(1 + next(58), 1 + next(58), 100);
+    for (int k = 0; k < 4; ++k) {
+      const int x0 = 1 + next(50), y0 = 1 + next(50);
+      for (int y = y0; y < y0 + 8; ++y)
+        for (int x = x0; x < x0 + 8; ++x) grid.Set(x, y, -1);
+    }
+    ExplorerConfig config = Config();
+    config.robot_radius_m = 0.12;
+    ExplorationPlanner planner(config);
+    const double x = 0.06 + 0.05 * next(56) + 0.001 * next(40), y = 0.06 + 0.05 * next(56) + 0.001 * next(40);
+    if (grid.cells[static_cast<int>(y / 0.05) * 60 + static_cast<int>(x / 0.05)] != 0) continue;
+    Pose2D pose{x, y, 0.1 * next(60)};
+    const Plan plan = planner.PlanFrom(grid.View(), pose);
+    bool moves = false;
+    for (const MotionCommand& c : plan.commands) {
+      if (c.kind == Kind::kRotate) pose.theta += c.angle_rad;
+      if (c.kind != Kind::kMove) continue;
+      moves = true;
+      if (!planner.IsPathClear(grid.View(), pose, c.distance_m)) {
+        ++refused;
+        break;
+      }
+      pose.x += c.distance_m * std::cos(pose.theta);
+      pose.y += c.distance_m * std::sin(pose.theta);
+    }
+    plans_with_moves += moves;
+  }
+  EXPECT_GT(plans_with_moves, 50);
+  EXPECT_LE(refused * 20, plans_with_moves) << refused << " of " << plans_with_moves << " plans had a refused move";
+}
+
 TEST(ExplorationPlannerTest, LooksBeforeItMoves) {
   TestGrid grid(40, 40, 0);
   ExplorationPlanner planner(Config());
