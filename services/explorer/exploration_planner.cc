@@ -138,7 +138,9 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       for (int x = ocx - reach; x <= ocx + reach; ++x)
         if (cs.Contains(x, y) && std::hypot(cs.CentreX(x) - ox, cs.CentreY(y) - oy) <= config_.robot_radius_m) {
           const size_t i = static_cast<size_t>(y) * w + x;
-          if (i != robot_index) traversable[i] = 0, near_blocking[i] = 1;  // the robot is where it is
+          if (i == robot_index) continue;  // the robot is where it is
+          traversable[i] = 0;
+          near_blocking[i] = 1;
         }
   };
   for (const auto& [ox, oy] : blocking_obstacles_) keep_off(ox, oy);
