@@ -154,14 +154,14 @@ class CameraNode::Impl {
     if (live_ || config_.wait_for_readers <= 0) return;
     const auto deadline = Clock::now() + Seconds(config_.wait_for_readers_timeout_s);
     const ServiceLinkWatch links(context_.participant());
+    // With services named, the camera's own heartbeat must be among them, so that theirs are
+    // checked against its writer: a writer-side match alone says nothing about the reader's side,
+    // and a volatile reader drops what arrives before it knows the writer.
+    std::vector<std::string> written;
+    if (!config_.wait_for_services.empty()) written.emplace_back(bus::topics::kCameraImage.name);
     std::vector<std::string> missing;
     const auto ready = [&] {
-      // With services named, the camera's own heartbeat must be among them, so that theirs are
-      // checked against its writer: a writer-side match alone says nothing about the reader's side,
-      // and a volatile reader drops what arrives before it knows the writer.
-      missing = links.Unmatched(config_.wait_for_services,
-                                config_.wait_for_services.empty() ? std::vector<std::string>{}
-                                                                  : std::vector<std::string>{std::string(bus::topics::kCameraImage.name)});
+      missing = links.Unmatched(config_.wait_for_services, written);
       return publisher_->MatchedSubscribers() >= config_.wait_for_readers && missing.empty();
     };
     while (!ready()) {

@@ -129,7 +129,8 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     goal[i] = 0;
   }
   // Cells within the robot radius of an obstacle reported since the last pirouette (or found on
-  // a plan's own move below): neither the descent nor the escape goes through them.
+  // a move of a plan made below, for this call only: the grid shows it to every later call):
+  // neither the descent nor the escape goes through them.
   std::vector<uint8_t> near_blocking(n, 0);
   const auto keep_off = [&](double ox, double oy) {
     const int reach = static_cast<int>(std::ceil(config_.robot_radius_m / cs.cell_size_m));
@@ -264,7 +265,6 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     // and plan again.
     if (blocked && replans_left-- > 0) {
       if (!first_blocked) first_blocked = plan;
-      blocking_obstacles_.push_back(*blocked);
       keep_off(blocked->first, blocked->second);
       continue;
     }
