@@ -1,5 +1,7 @@
 #include "services/experience_map/experience_map.h"
 
+#include "services/experience_map/pose_graph.h"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -188,7 +190,10 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
           changed = true;
         }
       }
-      if (changed) SeedLocalRegion(current_, to);
+      if (changed) {
+        graph_pending_ = true;
+        if (!config_.exp_graph_optimisation) SeedLocalRegion(current_, to);
+      }
       const Pose2 dead_reckoned = RobotPose();
       SetCurrent(to, a.relative_angle_rad);
       if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
@@ -204,12 +209,25 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
     }
   }
   if (a.kind != ExperienceAction::Kind::kNone) next_sequence_ = a.sequence + 1;
-  if (config_.exp_relax_budget_links == 0) {
+  if (config_.exp_graph_optimisation) {
+    last_correction_ = 0.0;
+    frames_since_graph_ = std::min(frames_since_graph_ + 1, config_.exp_graph_period_frames);
+    if (graph_pending_ && frames_since_graph_ >= config_.exp_graph_period_frames) OptimiseGraph(config_.exp_graph_iterations);
+  } else if (config_.exp_relax_budget_links == 0) {
     last_correction_ = 0.0;
     if (a.kind != ExperienceAction::Kind::kNone) Relax(config_.exp_loops);
   } else {
     CorrectBudgeted();
   }
+}
+
+void ExperienceMap::OptimiseGraph(int iterations) {
+  last_correction_ = OptimisePoseGraph(experiences_, links_,
+                                       {config_.exp_graph_link_sigma_m, config_.exp_graph_link_sigma_rad,
+                                        config_.exp_graph_closure_sigma_m, config_.exp_graph_closure_sigma_rad},
+                                       iterations);
+  graph_pending_ = false;
+  frames_since_graph_ = 0;
 }
 
 double ExperienceMap::RelaxLink(uint32_t index) {
@@ -410,7 +428,10 @@ void ExperienceMap::MergeFrom(const ExperienceMap& other, const std::vector<MapA
     AddLink(an.this_id, an.other_id + offset, {0.0, 0.0, 0.0, 0.0});
     links_.back().closes_loop = true;  // the two maps are joined where a place is recognised
   }
-  if (!anchors.empty()) SeedLocalRegion(anchors[0].this_id, anchors[0].other_id + offset);
+  if (!anchors.empty()) {
+    graph_pending_ = true;
+    if (!config_.exp_graph_optimisation) SeedLocalRegion(anchors[0].this_id, anchors[0].other_id + offset);
+  }
 }
 
 Pose2 ExperienceMap::RobotPose() const {

@@ -22,6 +22,10 @@
 // repeated full sweeps, only sliced over frames, so with no new actions the map converges to the
 // same fixed point as Relax(). Relax(iterations) runs full sweeps at once (e.g. before export).
 // exp_relax_budget_links = 0 restores OpenRatSLAM's behaviour.
+//
+// exp_graph_optimisation replaces the relaxation by the least-squares correction of
+// pose_graph.h: after a loop closure or a re-traversal, at most every exp_graph_period_frames
+// frames, a few Gauss-Newton steps over the whole map (the first experience stays put).
 
 #include <cstdint>
 #include <limits>
@@ -85,6 +89,9 @@ class ExperienceMap {
   // `iterations` full sweeps over all links (OpenRatSLAM iterate()); resets the sliced sweep to
   // a sweep boundary and drops the local region.
   void Relax(int iterations);
+  // The least-squares correction of pose_graph.h (`iterations` Gauss-Newton steps) now, whatever
+  // exp_graph_optimisation says; e.g. before export.
+  void OptimiseGraph(int iterations);
 
   // Shortest path by travel time over links (either direction) from `from_id` to `goal_id`,
   // both included; empty when unreachable. Throws std::invalid_argument for unknown ids.
@@ -152,6 +159,8 @@ class ExperienceMap {
   std::vector<LinkTrig> link_trig_;
   uint64_t next_sequence_ = 0;
   double last_correction_ = 0.0;
+  bool graph_pending_ = false;    // links changed since the last least-squares correction
+  int frames_since_graph_ = 0;
 };
 
 }  // namespace rslam::experience_map

@@ -32,6 +32,17 @@ struct ExperienceMapConfig {
   // match radius, to the map). The link's correction of the map is unchanged; below about 0.2
   // the map no longer holds together (a dead-reckoned robot keeps pulling it apart).
   double exp_position_correction = 1.0;
+  // Least-squares correction (pose_graph.h) instead of the relaxation: when a link was closed or
+  // re-traversed, at most every exp_graph_period_frames frames, exp_graph_iterations Gauss-Newton
+  // steps over the whole map. Off = OpenRatSLAM's relaxation (the exp_loops, exp_correction and
+  // exp_relax_* keys); on, those keys are not used.
+  bool exp_graph_optimisation = false;
+  int exp_graph_period_frames = 50;
+  int exp_graph_iterations = 2;
+  double exp_graph_link_sigma_m = 0.02;
+  double exp_graph_link_sigma_rad = 0.002;
+  double exp_graph_closure_sigma_m = 0.1;
+  double exp_graph_closure_sigma_rad = 0.01;
 
   template <class V>
   void VisitFields(V& v) {
@@ -50,6 +61,13 @@ struct ExperienceMapConfig {
       "on recognition, the share of the heading difference taken from the experience (1 = OpenRatSLAM, 0 = none)");
     v("exp_position_correction", exp_position_correction,
       "on recognition, the share of the way from the dead-reckoned position to the experience's (1 = OpenRatSLAM)");
+    v("exp_graph_optimisation", exp_graph_optimisation, "least-squares correction of the whole map after loop closures");
+    v("exp_graph_period_frames", exp_graph_period_frames, "fewest frames between two least-squares corrections");
+    v("exp_graph_iterations", exp_graph_iterations, "Gauss-Newton steps per least-squares correction");
+    v("exp_graph_link_sigma_m", exp_graph_link_sigma_m, "uncertainty of an odometric link's position (m)");
+    v("exp_graph_link_sigma_rad", exp_graph_link_sigma_rad, "uncertainty of an odometric link's facing (rad)");
+    v("exp_graph_closure_sigma_m", exp_graph_closure_sigma_m, "uncertainty of a recognised place's position (m)");
+    v("exp_graph_closure_sigma_rad", exp_graph_closure_sigma_rad, "uncertainty of a recognised place's facing (rad)");
   }
 
   void Validate() const {
@@ -62,6 +80,12 @@ struct ExperienceMapConfig {
     Require(exp_relax_tolerance >= 0, "exp_relax_tolerance", "must be non-negative");
     Require(exp_heading_correction >= 0 && exp_heading_correction <= 1, "exp_heading_correction", "must be in [0, 1]");
     Require(exp_position_correction > 0 && exp_position_correction <= 1, "exp_position_correction", "must be in (0, 1]");
+    Require(exp_graph_period_frames >= 1, "exp_graph_period_frames", "must be at least 1");
+    Require(exp_graph_iterations >= 1, "exp_graph_iterations", "must be at least 1");
+    Require(exp_graph_link_sigma_m > 0, "exp_graph_link_sigma_m", "must be positive");
+    Require(exp_graph_link_sigma_rad > 0, "exp_graph_link_sigma_rad", "must be positive");
+    Require(exp_graph_closure_sigma_m > 0, "exp_graph_closure_sigma_m", "must be positive");
+    Require(exp_graph_closure_sigma_rad > 0, "exp_graph_closure_sigma_rad", "must be positive");
   }
 };
 

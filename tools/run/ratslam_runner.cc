@@ -194,11 +194,24 @@ double RatSlamRunner::RmsLinkError() const {
 
 RelaxResult RatSlamRunner::RelaxToConvergence(double relative_tolerance, int max_sweeps) {
   constexpr int kSweepsPerBatch = 10;
+  constexpr int kGraphSteps = 20;
+  constexpr double kGraphStepTolerance = 1e-6;  // m and rad
   RelaxResult result;
   double error = RmsLinkError();
   result.rms_link_error_m = error;
   if (map_.links().empty()) {
     result.converged = true;
+    return result;
+  }
+  if (map_.config().exp_graph_optimisation) {  // least squares: Gauss-Newton steps, not sweeps
+    while (result.sweeps < kGraphSteps && !result.converged) {
+      map_.OptimiseGraph(1);
+      ++result.sweeps;
+      result.converged = map_.last_correction() <= kGraphStepTolerance;
+    }
+    const double next = RmsLinkError();
+    result.last_change_m = std::abs(next - error);
+    result.rms_link_error_m = next;
     return result;
   }
   while (result.sweeps < max_sweeps) {

@@ -60,7 +60,7 @@ struct FrameRecord {
 
 // How a final relaxation ended.
 struct RelaxResult {
-  int sweeps = 0;
+  int sweeps = 0;  // relaxation sweeps, or Gauss-Newton steps with exp_graph_optimisation
   bool converged = false;
   double rms_link_error_m = 0.0;  // after the last batch
   double last_change_m = 0.0;     // change of rms_link_error_m over the last batch

@@ -2,7 +2,10 @@
 // kLink loop closure + that frame's correction budget) on maps of 1,000 / 10,000 / 100,000
 // experiences: laps of 100 experiences around a circle, linked along the laps, to the same place
 // on the previous lap every tenth experience, with link noise so correction always has work.
-// BM_ExperienceMapFrameFullRelaxation is OpenRatSLAM's behaviour (10 full sweeps per action).
+// BM_ExperienceMapFrameFullRelaxation is OpenRatSLAM's behaviour (10 full sweeps per action);
+// BM_ExperienceMapFrameLeastSquares corrects by least squares (pose_graph.h) every 50 frames
+// instead, and BM_ExperienceMapLeastSquaresCorrection is one such correction (2 Gauss-Newton
+// steps over the whole map).
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -89,7 +92,30 @@ void BM_ExperienceMapFrameFullRelaxation(benchmark::State& state) {
   RunFrames(state, cfg);
 }
 
+void BM_ExperienceMapFrameLeastSquares(benchmark::State& state) {
+  ExperienceMapConfig cfg;
+  cfg.exp_graph_optimisation = true;
+  RunFrames(state, cfg);
+}
+
+void BM_ExperienceMapLeastSquaresCorrection(benchmark::State& state) {
+  const pb::ExperienceMap laps = BuildLaps(static_cast<int>(state.range(0)));
+  ExperienceMapConfig cfg;
+  cfg.exp_graph_optimisation = true;
+  ExperienceMap map(cfg);
+  for (auto _ : state) {
+    state.PauseTiming();
+    map.Load(laps);  // from the same noisy start every time
+    state.ResumeTiming();
+    map.OptimiseGraph(cfg.exp_graph_iterations);
+  }
+  state.counters["experiences"] = static_cast<double>(map.experiences().size());
+  state.counters["links"] = static_cast<double>(map.links().size());
+}
+
 BENCHMARK(BM_ExperienceMapFrameBudgeted)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ExperienceMapFrameFullRelaxation)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ExperienceMapFrameLeastSquares)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ExperienceMapLeastSquaresCorrection)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -287,6 +287,145 @@ TEST(ExperienceMap, LocalRegionCorrectsALoopClosureWithinAFewFrames) {
       << map.MaxLinkError() << " vs " << full.MaxLinkError();
 }
 
+ExperienceMapConfig LeastSquares(int period_frames) {
+  ExperienceMapConfig c;
+  c.exp_graph_optimisation = true;
+  c.exp_graph_period_frames = period_frames;
+  return c;
+}
+
+// Where link l says its target is, minus where the target is (m).
+double LinkPositionError(const ExperienceMap& map, const Link& l) {
+  const Experience& from = map.experiences()[l.from_id];
+  const Experience& to = map.experiences()[l.to_id];
+  return std::hypot(from.x_m + l.d_m * std::cos(from.th_rad + l.heading_rad) - to.x_m,
+                    from.y_m + l.d_m * std::sin(from.th_rad + l.heading_rad) - to.y_m);
+}
+
+TEST(ExperienceMap, LeastSquaresCorrectsADriftedSquareInOneFrameAsWellAsRelaxation) {
+  ExperienceMap uncorrected(NoCorrection());
+  const auto truth = DriveSquare(uncorrected, 1.0, 0.03);
+  ExperienceMapConfig relax_cfg;
+  relax_cfg.exp_relax_budget_links = 0;  // OpenRatSLAM: exp_loops sweeps after every action
+  relax_cfg.exp_loops = 100;
+  ExperienceMap relaxed(relax_cfg);
+  DriveSquare(relaxed, 1.0, 0.03);
+  ExperienceMapConfig cfg = LeastSquares(1);  // corrected in the closing frame itself
+  cfg.exp_graph_closure_sigma_m = cfg.exp_graph_link_sigma_m;  // the closure here is as sure as a step
+  cfg.exp_graph_closure_sigma_rad = cfg.exp_graph_link_sigma_rad;
+  ExperienceMap least_squares(cfg);
+  DriveSquare(least_squares, 1.0, 0.03);
+  const double before = ShapeError(uncorrected, truth);
+  const double after_relaxation = ShapeError(relaxed, truth);
+  const double after = ShapeError(least_squares, truth);
+  // As good as OpenRatSLAM's 100 sweeps after every action, in the closing frame alone.
+  EXPECT_LT(after, after_relaxation + 0.005) << "relaxation " << after_relaxation << " least squares " << after;
+  EXPECT_LT(after, 0.1 * before) << "before " << before << " after " << after;
+  EXPECT_EQ(least_squares.experiences()[0].x_m, 0.0);  // the first experience stays put
+  EXPECT_EQ(least_squares.experiences()[0].y_m, 0.0);
+}
+
+// A unit square 0 -> 1 -> 2 -> 3 with exact odometric links and a recognition 3 -> 0 that puts
+// experience 0 `closure_error` m further along than it is.
+proto::ExperienceMap SquareWithAnOffClosure(double closure_error) {
+  proto::ExperienceMap m;
+  const double xs[] = {0, 1, 1, 0}, ys[] = {0, 0, 1, 1};
+  for (int i = 0; i < 4; ++i) {
+    auto* e = m.add_experiences();
+    e->set_x_m(xs[i]);
+    e->set_y_m(ys[i]);
+    e->set_th_rad(i * kPi / 2);
+  }
+  for (uint32_t i = 0; i < 4; ++i) {
+    auto* l = m.add_links();
+    l->set_from_id(i);
+    l->set_to_id((i + 1) % 4);
+    l->set_d_m(i == 3 ? 1.0 + closure_error : 1.0);
+    l->set_facing_rad(kPi / 2);
+    l->set_traversals(1);
+    l->set_closes_loop(i == 3);
+  }
+  m.set_has_current(true);
+  m.set_current_id(3);
+  return m;
+}
+
+TEST(ExperienceMap, LeastSquaresPutsTheErrorOnTheLeastSureLinks) {
+  for (const double closure_sigma : {0.2, 0.02}) {  // recognition less sure than odometry, as sure
+    ExperienceMapConfig cfg = LeastSquares(1);
+    cfg.exp_graph_link_sigma_m = 0.02;
+    cfg.exp_graph_closure_sigma_m = closure_sigma;
+    ExperienceMap map(cfg);
+    map.Load(SquareWithAnOffClosure(0.4));
+    map.OptimiseGraph(5);
+    double odometric = 0.0;
+    for (int i = 0; i < 3; ++i) odometric = std::max(odometric, LinkPositionError(map, map.links()[i]));
+    const double closure = LinkPositionError(map, map.links()[3]);
+    if (closure_sigma > cfg.exp_graph_link_sigma_m) {
+      EXPECT_LT(odometric, 0.01) << "closure " << closure;
+      EXPECT_GT(closure, 0.35);
+    } else {  // equally sure: the 0.4 m spread over the four links
+      EXPECT_NEAR(odometric, 0.1, 0.03);
+      EXPECT_NEAR(closure, 0.1, 0.03);
+    }
+  }
+}
+
+TEST(ExperienceMap, LeastSquaresLeavesAConsistentMapAlone) {
+  ExperienceMap map(LeastSquares(1));
+  map.Load(SquareWithAnOffClosure(0.0));
+  map.OptimiseGraph(3);
+  EXPECT_LT(map.last_correction(), 1e-12);
+  for (const Link& l : map.links()) EXPECT_LT(LinkPositionError(map, l), 1e-12);
+}
+
+TEST(ExperienceMap, LeastSquaresKeepsTheFirstExperienceOfEveryUnjoinedMapInPlace) {
+  ExperienceMap a(LeastSquares(1));
+  a.Load(SquareWithAnOffClosure(0.4));
+  ExperienceMap b(NoCorrection());
+  b.Load(SquareWithAnOffClosure(0.4));
+  a.MergeFrom(b, {});  // no anchor: two maps side by side, b's at its own poses
+  a.OptimiseGraph(5);
+  ASSERT_EQ(a.experiences().size(), 8u);
+  for (uint32_t first : {0u, 4u}) {
+    EXPECT_EQ(a.experiences()[first].x_m, 0.0) << first;
+    EXPECT_EQ(a.experiences()[first].y_m, 0.0) << first;
+    EXPECT_EQ(a.experiences()[first].th_rad, 0.0) << first;
+  }
+  for (const Experience& e : a.experiences()) EXPECT_TRUE(std::isfinite(e.x_m) && std::isfinite(e.th_rad));
+  for (int i = 0; i < 3; ++i) {  // both squares corrected alike: the 0.4 m mostly on the closure
+    EXPECT_LT(LinkPositionError(a, a.links()[i]), 0.05) << i;
+    EXPECT_NEAR(LinkPositionError(a, a.links()[i]), LinkPositionError(a, a.links()[i + 4]), 1e-9) << i;
+  }
+}
+
+TEST(ExperienceMap, LeastSquaresWaitsForThePeriodAfterTheLastCorrection) {
+  ExperienceMap map(LeastSquares(5));
+  DriveSquare(map, 1.0, 0.03);  // corrected in the closing frame: no correction for 4 frames before
+  ASSERT_EQ(map.current_id(), 0u);
+  map.Integrate(2.5, 0.0, 1.0);  // re-traverse 0 -> 1, half a metre longer than the first time
+  map.Apply(LinkTo(Kind::kLink, 0, 1));
+  for (int frame = 2; frame < 5; ++frame) {
+    map.Apply(ExperienceAction{});
+    EXPECT_EQ(map.last_correction(), 0.0) << frame;
+  }
+  map.Apply(ExperienceAction{});  // the fifth frame since the last correction
+  EXPECT_GT(map.last_correction(), 0.01);
+  map.Apply(ExperienceAction{});  // nothing changed since: nothing to correct
+  EXPECT_EQ(map.last_correction(), 0.0);
+}
+
+TEST(ExperienceMap, LeastSquaresKeysOutOfRangeAreRefused) {
+  ExperienceMapConfig period = LeastSquares(0);
+  EXPECT_THROW(period.Validate(), ConfigError);
+  ExperienceMapConfig sigma = LeastSquares(1);
+  sigma.exp_graph_closure_sigma_rad = 0.0;
+  EXPECT_THROW(sigma.Validate(), ConfigError);
+  ExperienceMapConfig iterations = LeastSquares(1);
+  iterations.exp_graph_iterations = 0;
+  EXPECT_THROW(iterations.Validate(), ConfigError);
+}
+
 proto::ExperienceMap SmallGraph() {
   proto::ExperienceMap m;
   for (int i = 0; i < 5; ++i) m.add_experiences()->set_x_m(i);

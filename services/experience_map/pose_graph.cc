@@ -1,0 +1,110 @@
+#include "services/experience_map/pose_graph.h"
+
+#include <Eigen/Core>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <numeric>
+
+namespace rslam::experience_map {
+namespace {
+
+// Angle in (-pi, pi], as the experience map keeps them.
+double Wrap(double a) {
+  a = std::remainder(a, 2.0 * std::numbers::pi);
+  return a <= -std::numbers::pi ? a + 2.0 * std::numbers::pi : a;
+}
+
+// Index of each experience's variables in the system (3 per free experience), or -1 for the
+// lowest-id experience of each connected part, which stays where it is.
+std::vector<int> FreeIndices(size_t n, const std::vector<Link>& links) {
+  std::vector<uint32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0U);
+  auto root = [&](uint32_t e) {
+    while (parent[e] != e) e = parent[e] = parent[parent[e]];
+    return e;
+  };
+  for (const Link& l : links) {
+    const uint32_t a = root(l.from_id), b = root(l.to_id);
+    parent[std::max(a, b)] = std::min(a, b);  // the root of a part is its lowest id
+  }
+  std::vector<int> index(n, -1);
+  int next = 0;
+  for (uint32_t e = 0; e < n; ++e) {
+    if (root(e) != e) index[e] = 3 * next++;
+  }
+  return index;
+}
+
+}  // namespace
+
+double OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
+                         const PoseGraphSigmas& sigmas, int iterations) {
+  const std::vector<int> index = FreeIndices(experiences.size(), links);
+  const int size = static_cast<int>(3 * std::count_if(index.begin(), index.end(), [](int i) { return i >= 0; }));
+  if (size == 0) return 0.0;
+  const Eigen::Vector3d link_weight(1 / (sigmas.link_m * sigmas.link_m), 1 / (sigmas.link_m * sigmas.link_m),
+                                    1 / (sigmas.link_rad * sigmas.link_rad));
+  const Eigen::Vector3d closure_weight(1 / (sigmas.closure_m * sigmas.closure_m),
+                                       1 / (sigmas.closure_m * sigmas.closure_m),
+                                       1 / (sigmas.closure_rad * sigmas.closure_rad));
+  double largest = 0.0;
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    triplets.clear();
+    triplets.reserve(links.size() * 36);
+    Eigen::VectorXd gradient = Eigen::VectorXd::Zero(size);
+    for (const Link& l : links) {
+      const Experience& from = experiences[l.from_id];
+      const Experience& to = experiences[l.to_id];
+      const double c = std::cos(from.th_rad), s = std::sin(from.th_rad);
+      const double px = to.x_m - from.x_m, py = to.y_m - from.y_m;
+      const Eigen::Vector3d error(c * px + s * py - l.d_m * std::cos(l.heading_rad),
+                                  -s * px + c * py - l.d_m * std::sin(l.heading_rad),
+                                  Wrap(to.th_rad - from.th_rad - l.facing_rad));
+      Eigen::Matrix3d jf, jt;  // d error / d (x, y, theta) of from and of to
+      jf << -c, -s, -s * px + c * py,  //
+          s, -c, -c * px - s * py,     //
+          0, 0, -1;
+      jt << c, s, 0,  //
+          -s, c, 0,   //
+          0, 0, 1;
+      const Eigen::DiagonalMatrix<double, 3> w(l.closes_loop ? closure_weight : link_weight);
+      const int at[2] = {index[l.from_id], index[l.to_id]};
+      const Eigen::Matrix3d* j[2] = {&jf, &jt};
+      for (int a = 0; a < 2; ++a) {
+        if (at[a] < 0) continue;
+        gradient.segment<3>(at[a]) += j[a]->transpose() * (w * error);
+        for (int b = 0; b < 2; ++b) {
+          if (at[b] < 0) continue;
+          const Eigen::Matrix3d block = j[a]->transpose() * w * *j[b];
+          for (int r = 0; r < 3; ++r) {
+            for (int q = 0; q < 3; ++q) triplets.emplace_back(at[a] + r, at[b] + q, block(r, q));
+          }
+        }
+      }
+    }
+    Eigen::SparseMatrix<double> hessian(size, size);
+    hessian.setFromTriplets(triplets.begin(), triplets.end());
+    if (iteration == 0) solver.analyzePattern(hessian);  // the same links every iteration
+    solver.factorize(hessian);
+    if (solver.info() != Eigen::Success) break;  // cannot happen with every part anchored
+    const Eigen::VectorXd step = solver.solve(-gradient);
+    for (size_t e = 0; e < experiences.size(); ++e) {
+      if (index[e] < 0) continue;
+      const Eigen::Vector3d d = step.segment<3>(index[e]);
+      Experience& x = experiences[e];
+      x.x_m += d[0];
+      x.y_m += d[1];
+      x.th_rad = Wrap(x.th_rad + d[2]);
+      largest = std::max({largest, std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+    }
+  }
+  return largest;
+}
+
+}  // namespace rslam::experience_map

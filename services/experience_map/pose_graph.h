@@ -1,0 +1,37 @@
+#pragma once
+// Least-squares correction of the experience map: the experiences' poses that best agree with
+// every link at once, by Gauss-Newton on SE(2) with a sparse Cholesky solve (the pose-graph
+// formulation of Grisetti et al., "A tutorial on graph-based SLAM", 2010).
+//
+// 000 eq. 3 (the relaxation of experience_map.h) moves each pair of experiences towards agreement
+// with its link by alpha of the error, one link at a time. Its fixed point treats every link as
+// equally sure, and an error around a long loop spreads only a few links per sweep. Here each
+// link has an uncertainty (odometric links are much surer than a recognition's "the robot is at
+// that experience", which is only as close as the pose-cell match radius), and the whole map
+// moves to the minimum of
+//     sum over links i->j of  |e_ij|^2 weighted by 1/sigma^2,
+//     e_ij = ( R(theta_i)^T (p_j - p_i) - d_ij ,  theta_j - theta_i - facing_ij )
+// where d_ij is the link's displacement in i's frame (000 eq. 1).
+//
+// The lowest-id experience of every connected part of the map stays where it is (the gauge: the
+// map frame does not move, and merged maps without anchors stay apart).
+
+#include <vector>
+
+#include "services/experience_map/experience_map.h"
+
+namespace rslam::experience_map {
+
+struct PoseGraphSigmas {
+  double link_m = 0.02;        // odometric link: position (m) ...
+  double link_rad = 0.002;     // ... and facing (rad)
+  double closure_m = 0.1;      // link made by recognising a place
+  double closure_rad = 0.01;
+};
+
+// Runs `iterations` Gauss-Newton steps over all experiences and links; returns the largest
+// change (m or rad) it made. Links must name existing experiences.
+double OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
+                         const PoseGraphSigmas& sigmas, int iterations);
+
+}  // namespace rslam::experience_map
