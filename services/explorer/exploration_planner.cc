@@ -144,8 +144,9 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
           near_blocking[i] = 1;
         }
   };
-  for (const auto& [ox, oy] : blocking_obstacles_) keep_off(ox, oy);
   if (!goal[robot_index]) traversable[robot_index] = 1;  // the robot is there, whatever the map says
+  const std::vector<uint8_t> traversable_without_keep_off = traversable;
+  for (const auto& [ox, oy] : blocking_obstacles_) keep_off(ox, oy);
 
   const bool looked_here = last_pirouette_ && cs.CellX(last_pirouette_->x) == rx &&
                            cs.CellY(last_pirouette_->y) == ry;
@@ -161,6 +162,19 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
                                           : std::vector<std::pair<int, int>>{};
     if (cost[robot_index] == kUnreachable && escape.empty()) {
       if (first_blocked) return *first_blocked;
+      // The obstacles kept off since the last look may be all that walls the robot in (they
+      // pile up between pirouettes, which are rare without pirouette_at_goal): look all round
+      // (that forgets them) and plan again, once per cell.
+      if (!blocking_obstacles_.empty() && !looked_here &&
+          ComputeExplorationTransform(cs.width, cs.height, traversable_without_keep_off, goal)[robot_index] !=
+              kUnreachable) {
+        plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
+                                 config_.pirouette_steps});
+        plan.reason = "unknown space is reachable only past obstacles kept off since the last look: pirouette";
+        plan.has_target = true;
+        plan.target = robot;
+        return plan;
+      }
       plan.complete = true;
       plan.commands.push_back({MotionCommand::Kind::kStop});
       plan.reason = "no reachable unknown space remains (" + std::to_string(set_aside_.size()) +

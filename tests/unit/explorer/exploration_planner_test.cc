@@ -326,6 +326,36 @@ TEST(ExplorationPlannerTest, ABlockedMoveSendsTheNextPlanAroundTheObstacleUntilT
   EXPECT_LT(ClosestApproach(planner.PlanFrom(grid.View(), robot), robot, ox, oy), 0.05);
 }
 
+TEST(ExplorationPlannerTest, ObstaclesKeptOffSinceTheLastLookDoNotEndExploration) {
+  // Unknown space beyond a wall with one door; the robot in the west.
+  TestGrid grid(60, 40, 0);
+  for (int y = 1; y < 39; ++y) grid.Set(30, y, 100);
+  for (int y = 16; y < 24; ++y) grid.Set(30, y, 0);  // a 40 cm door around y = 1.0 m
+  for (int y = 1; y < 39; ++y)
+    for (int x = 40; x < 59; ++x) grid.Set(x, y, -1);
+  ExplorationPlanner planner(Config());
+  const Pose2D robot{0.5, 1.0, 0.0};
+  ASSERT_FALSE(planner.PlanFrom(grid.View(), robot).complete);
+  // Look before you move refused moves in and beside the door: kept off, the obstacles close the
+  // only way (the door and its dilation margins, which an escape path may cross).
+  const auto refuse_the_door = [&] {
+    for (double y : {0.85, 0.95, 1.05, 1.15}) planner.ReportBlocked(Plan{}, std::pair{1.55, y});
+  };
+  refuse_the_door();
+  const Plan look = planner.PlanFrom(grid.View(), robot);
+  EXPECT_FALSE(look.complete) << look.reason;
+  ASSERT_EQ(look.commands.size(), 1u) << look.reason;
+  EXPECT_EQ(look.commands[0].kind, Kind::kPirouette);
+  // The pirouette forgets the obstacles: the way through the door is planned again.
+  planner.RecordPirouette(robot);
+  const Plan again = planner.PlanFrom(grid.View(), robot);
+  EXPECT_FALSE(again.complete) << again.reason;
+  EXPECT_LT(ClosestApproach(again, robot, 1.55, 1.0), 0.1);
+  // Refused again where the robot has just looked: nothing more to try from here.
+  refuse_the_door();
+  EXPECT_TRUE(planner.PlanFrom(grid.View(), robot).complete);
+}
+
 // Heading of a plan's first straight move from `from`; none without one.
 std::optional<double> FirstMoveHeading(const Plan& plan, Pose2D from) {
   for (const MotionCommand& c : plan.commands) {
