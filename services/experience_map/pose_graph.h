@@ -22,11 +22,10 @@
 
 namespace rslam::experience_map {
 
+// Uncertainties (standard deviations) of the links' displacement (m) and facing (rad).
 struct PoseGraphSigmas {
-  double link_m = 0.02;        // odometric link: position (m) ...
-  double link_rad = 0.002;     // ... and facing (rad)
-  double closure_m = 0.1;      // link made by recognising a place
-  double closure_rad = 0.01;
+  double link_m, link_rad;        // odometric link
+  double closure_m, closure_rad;  // link made by recognising a place
 };
 
 // Runs `iterations` Gauss-Newton steps over all experiences and links; returns the largest
