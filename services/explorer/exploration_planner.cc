@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "services/explorer/exploration_transform.h"
 
@@ -150,6 +151,14 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
 
   const bool looked_here = last_pirouette_ && cs.CellX(last_pirouette_->x) == rx &&
                            cs.CellY(last_pirouette_->y) == ry;
+  const auto look_here = [&](Plan plan, std::string reason) {  // one pirouette where the robot stands
+    plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
+                             config_.pirouette_steps});
+    plan.reason = std::move(reason);
+    plan.has_target = true;
+    plan.target = robot;
+    return plan;
+  };
   int replans_left = kMaxReplansForBlockedMoves;
   std::optional<Plan> first_blocked;  // returned if keeping off its obstacle leaves nothing to explore
   while (true) {
@@ -167,14 +176,8 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       // (that forgets them) and plan again, once per cell.
       if (!blocking_obstacles_.empty() && !looked_here &&
           ComputeExplorationTransform(cs.width, cs.height, traversable_without_keep_off, goal)[robot_index] !=
-              kUnreachable) {
-        plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
-                                 config_.pirouette_steps});
-        plan.reason = "unknown space is reachable only past obstacles kept off since the last look: pirouette";
-        plan.has_target = true;
-        plan.target = robot;
-        return plan;
-      }
+              kUnreachable)
+        return look_here(plan, "unknown space is reachable only past obstacles kept off since the last look: pirouette");
       plan.complete = true;
       plan.commands.push_back({MotionCommand::Kind::kStop});
       plan.reason = "no reachable unknown space remains (" + std::to_string(set_aside_.size()) +
@@ -225,12 +228,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
         traversable[gi] = gi == robot_index;
         continue;
       }
-      plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
-                               config_.pirouette_steps});
-      plan.reason = "unknown space next to the robot: pirouette";
-      plan.has_target = true;
-      plan.target = robot;
-      return plan;
+      return look_here(plan, "unknown space next to the robot: pirouette");
     }
     // Piece-wise linear motion: one waypoint per run of equal steps.
     std::vector<std::pair<double, double>> waypoints;
