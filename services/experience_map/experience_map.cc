@@ -19,15 +19,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// Angle in (-pi, pi].
-double ClipAngle(double a) {
-  if (a > kPi || a <= -kPi) {
-    a = std::remainder(a, 2.0 * kPi);
-    if (a <= -kPi) a += 2.0 * kPi;
-  }
-  return a;
-}
-
 [[noreturn]] void Reject(const std::string& why) {
   throw std::invalid_argument("experience map: " + why);
 }

@@ -27,8 +27,10 @@
 // pose_graph.h: after a loop closure or a re-traversal, at most every exp_graph_period_frames
 // frames, a few Gauss-Newton steps over the whole map (the first experience stays put).
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <vector>
 
 #include "services/experience_map/experience_action.h"
@@ -53,6 +55,16 @@ struct Link {
   uint32_t traversals = 1;
   bool closes_loop = false;  // made by recognising a known place (kLink), not by a kCreate
 };
+
+// Angle in (-pi, pi], as the map keeps them.
+inline double ClipAngle(double a) {
+  constexpr double kPi = std::numbers::pi;
+  if (a > kPi || a <= -kPi) {
+    a = std::remainder(a, 2.0 * kPi);
+    if (a <= -kPi) a += 2.0 * kPi;
+  }
+  return a;
+}
 
 struct Pose2 {
   double x_m = 0.0, y_m = 0.0, th_rad = 0.0;

@@ -6,17 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <numbers>
 #include <numeric>
 
 namespace rslam::experience_map {
 namespace {
-
-// Angle in (-pi, pi], as the experience map keeps them.
-double Wrap(double a) {
-  a = std::remainder(a, 2.0 * std::numbers::pi);
-  return a <= -std::numbers::pi ? a + 2.0 * std::numbers::pi : a;
-}
 
 // Index of each experience's variables in the system (3 per free experience), or -1 for the
 // lowest-id experience of each connected part, which stays where it is.
@@ -65,7 +58,7 @@ double OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector
       const double px = to.x_m - from.x_m, py = to.y_m - from.y_m;
       const Eigen::Vector3d error(c * px + s * py - l.d_m * std::cos(l.heading_rad),
                                   -s * px + c * py - l.d_m * std::sin(l.heading_rad),
-                                  Wrap(to.th_rad - from.th_rad - l.facing_rad));
+                                  ClipAngle(to.th_rad - from.th_rad - l.facing_rad));
       Eigen::Matrix3d jf, jt;  // d error / d (x, y, theta) of from and of to
       jf << -c, -s, -s * px + c * py,  //
           s, -c, -c * px - s * py,     //
@@ -100,7 +93,7 @@ double OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector
       Experience& x = experiences[e];
       x.x_m += d[0];
       x.y_m += d[1];
-      x.th_rad = Wrap(x.th_rad + d[2]);
+      x.th_rad = ClipAngle(x.th_rad + d[2]);
       largest = std::max({largest, std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
     }
   }
