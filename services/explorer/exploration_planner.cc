@@ -79,8 +79,8 @@ bool ExplorationPlanner::IsSetAside(int x, int y) const {
                      [&](const SetAsideGoal& g) { return g.x == x && g.y == y; });
 }
 
-void ExplorationPlanner::SetAside(int x, int y, std::string reason) {
-  if (!IsSetAside(x, y)) set_aside_.push_back({x, y, std::move(reason)});
+void ExplorationPlanner::SetAside(int x, int y, std::string reason, bool blocked) {
+  if (!IsSetAside(x, y)) set_aside_.push_back({x, y, std::move(reason), blocked});
 }
 
 void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair<double, double>> obstacle) {
@@ -90,10 +90,12 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
     blocking_obstacles_.push_back(*obstacle);
   }
   if (plan.goal_x < 0) return;
-  if (++blocked_attempts_[{plan.goal_x, plan.goal_y}] >= config_.max_blocked_attempts)
+  // Every max_blocked_attempts refusals set the goal aside (PlanFrom may try it again).
+  if (++blocked_attempts_[{plan.goal_x, plan.goal_y}] % config_.max_blocked_attempts == 0)
     SetAside(plan.goal_x, plan.goal_y,
              "look before you move found the way blocked " + std::to_string(config_.max_blocked_attempts) +
-                 " times");
+                 " times",
+             true);
 }
 
 void ExplorationPlanner::ReportBump(const Plan& plan, const Pose2D& at, bool backwards) {
@@ -109,11 +111,90 @@ bool ExplorationPlanner::PassesBlockingObstacle(const Pose2D& from, double dista
   });
 }
 
+std::optional<Plan> ExplorationPlanner::StepOutOfRadius(const GridView& occupancy, const Pose2D& robot) const {
+  const double r = config_.robot_radius_m, res = occupancy.resolution_m;
+  // Distance from (x, y) to the nearest obstacle cell centre (or cell past the map's edge), at
+  // most r; `away` sums the unit vectors from each closer cell, weighted by how far inside.
+  const auto clearance = [&](double x, double y, double* away_x = nullptr, double* away_y = nullptr) {
+    const int cx0 = static_cast<int>(std::floor((x - r - occupancy.origin_x_m) / res));
+    const int cy0 = static_cast<int>(std::floor((y - r - occupancy.origin_y_m) / res));
+    const int span = static_cast<int>(std::ceil(2 * r / res)) + 1;
+    double nearest = r;
+    for (int cy = cy0; cy <= cy0 + span; ++cy)
+      for (int cx = cx0; cx <= cx0 + span; ++cx) {
+        const bool obstacle = cx < 0 || cy < 0 || cx >= occupancy.width || cy >= occupancy.height ||
+                              occupancy.ClassAt(cx, cy) == CellClass::kOccupied;
+        if (!obstacle) continue;
+        const double dx = x - (occupancy.origin_x_m + (cx + 0.5) * res);
+        const double dy = y - (occupancy.origin_y_m + (cy + 0.5) * res);
+        const double d = std::hypot(dx, dy);
+        if (d >= r) continue;
+        nearest = std::min(nearest, d);
+        if (away_x && d > 1e-9) {
+          *away_x += (r - d) * dx / d;
+          *away_y += (r - d) * dy / d;
+        }
+      }
+    return nearest;
+  };
+  double away_x = 0.0, away_y = 0.0;
+  const double inside = clearance(robot.x, robot.y, &away_x, &away_y);
+  if (inside >= r - 1e-9 || std::hypot(away_x, away_y) < 1e-12) return std::nullopt;
+  // Straight away from the obstacles, or up to 90 degrees either side of that, as far as the
+  // radius needs: the step that leaves the most clearance and passes look before you move.
+  const double away = std::atan2(away_y, away_x), distance = r - inside + 0.25 * res;
+  std::optional<Pose2D> best;
+  double best_clearance = inside + 0.25 * res;  // a step must gain at least this much
+  for (const double offset : {0.0, M_PI / 6, -M_PI / 6, M_PI / 3, -M_PI / 3, M_PI / 2, -M_PI / 2}) {
+    const Pose2D step{robot.x, robot.y, away + offset};
+    const double ex = robot.x + distance * std::cos(step.theta), ey = robot.y + distance * std::sin(step.theta);
+    const double c = clearance(ex, ey);
+    if (c > best_clearance + 1e-9 && IsPathClear(occupancy, step, distance) && !PassesBlockingObstacle(step, distance)) {
+      best_clearance = c;
+      best = Pose2D{ex, ey, step.theta};
+    }
+  }
+  if (!best) return std::nullopt;
+  Plan plan;
+  const double turn = NormalizeAngle(best->theta - robot.theta);
+  if (std::abs(turn) > 1e-9) plan.commands.push_back({MotionCommand::Kind::kRotate, turn, 0.0, 0});
+  plan.commands.push_back({MotionCommand::Kind::kMove, 0.0, distance, 0});
+  plan.has_target = true;
+  plan.target = *best;
+  plan.reason = "an obstacle is " + std::to_string(static_cast<int>(std::lround(inside * 100))) +
+                " cm away, inside the robot radius: stepping out";
+  return plan;
+}
+
+std::optional<std::pair<int, int>> ExplorationPlanner::DirectEntry(const GridView& occupancy, const CoarseGrid& cs,
+                                                                  const std::vector<int32_t>& cost,
+                                                                  const std::vector<uint8_t>& traversable,
+                                                                  const Pose2D& robot) const {
+  constexpr int kReach = 5;  // cells: 1 m at the demo's 0.2 m exploration cells
+  const int rx = cs.CellX(robot.x), ry = cs.CellY(robot.y);
+  std::vector<std::pair<double, std::pair<int, int>>> candidates;
+  for (int y = ry - kReach; y <= ry + kReach; ++y)
+    for (int x = rx - kReach; x <= rx + kReach; ++x) {
+      if (!cs.Contains(x, y)) continue;
+      const size_t i = static_cast<size_t>(y) * cs.width + x;
+      if (!traversable[i] || cost[i] == kUnreachable) continue;
+      candidates.push_back({std::hypot(cs.CentreX(x) - robot.x, cs.CentreY(y) - robot.y), {x, y}});
+    }
+  std::sort(candidates.begin(), candidates.end());
+  for (const auto& [distance, cell] : candidates) {
+    const Pose2D step{robot.x, robot.y,
+                      std::atan2(cs.CentreY(cell.second) - robot.y, cs.CentreX(cell.first) - robot.x)};
+    if (IsPathClear(occupancy, step, distance) && !PassesBlockingObstacle(step, distance)) return cell;
+  }
+  return std::nullopt;
+}
+
 Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
   if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
   const CoarseGrid cs = BuildConfigurationSpace(occupancy, config_);
   const int rx = cs.CellX(robot.x), ry = cs.CellY(robot.y);
   if (!cs.Contains(rx, ry)) throw std::invalid_argument("robot is outside the map");
+  if (std::optional<Plan> out = StepOutOfRadius(occupancy, robot)) return *out;
   const int w = cs.width;
   const size_t n = cs.cells.size();
   const size_t robot_index = static_cast<size_t>(ry) * w + rx;
@@ -161,23 +242,65 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   };
   int replans_left = kMaxReplansForBlockedMoves;
   std::optional<Plan> first_blocked;  // returned if keeping off its obstacle leaves nothing to explore
+  // An off-centre robot first steps to the centre of its cell, unless that step itself comes
+  // closer to an obstacle than the robot already is (it stands off-centre beside a wall).
+  const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
+  const Pose2D to_centre{robot.x, robot.y, std::atan2(cs.CentreY(ry) - robot.y, cs.CentreX(rx) - robot.x)};
+  const bool centre_step = off_centre > 0.25 * cs.cell_size_m;
+  const bool centre_step_clear = !centre_step || (IsPathClear(occupancy, to_centre, off_centre) &&
+                                                  !PassesBlockingObstacle(to_centre, off_centre));
   while (true) {
     const std::vector<int32_t> cost = ComputeExplorationTransform(cs.width, cs.height, traversable, goal);
     Plan plan;
     // A robot inside the dilation margin (after a pirouette beside a wall, or when the grid has
-    // just marked an obstacle next to it) first steps out to the nearest cell that can reach a goal.
-    const std::vector<std::pair<int, int>> escape =
-        cost[robot_index] == kUnreachable ? EscapePath(cs, cost, near_blocking, rx, ry)
-                                          : std::vector<std::pair<int, int>>{};
+    // just marked an obstacle next to it), or whose step to its cell's centre is refused, first
+    // gets to the nearest cell that can reach a goal: in one straight move that look before you
+    // move allows if there is one, else (in the margin) cell by cell through the margin.
+    std::vector<std::pair<int, int>> escape;
+    std::optional<std::pair<int, int>> entry;
+    if (cost[robot_index] == kUnreachable || !centre_step_clear) {
+      entry = DirectEntry(occupancy, cs, cost, traversable, robot);
+      if (entry) escape = {*entry};
+      else if (cost[robot_index] == kUnreachable) escape = EscapePath(cs, cost, near_blocking, rx, ry);
+    }
     if (cost[robot_index] == kUnreachable && escape.empty()) {
       if (first_blocked) return *first_blocked;
-      // The obstacles kept off since the last look may be all that walls the robot in (they
-      // pile up between pirouettes, which are rare without pirouette_at_goal): look all round
-      // (that forgets them) and plan again, once per cell.
-      if (!blocking_obstacles_.empty() && !looked_here &&
-          ComputeExplorationTransform(cs.width, cs.height, traversable_without_keep_off, goal)[robot_index] !=
-              kUnreachable)
-        return look_here(plan, "unknown space is reachable only past obstacles kept off since the last look: pirouette");
+      // What the planner keeps from refused moves may be all that leaves no unknown space
+      // reachable: the obstacles kept off since the last look (they pile up between pirouettes,
+      // which are rare without pirouette_at_goal) and the goals set aside after refusals (a robot
+      // wedged against a wall the camera is too close to see used up goal after goal that way).
+      // Look all round (that forgets the obstacles), then try those goals again, at most
+      // blocked_goal_retries times each.
+      std::vector<size_t> retry;
+      for (const SetAsideGoal& g : set_aside_) {
+        if (g.blocked && cs.Contains(g.x, g.y) &&
+            blocked_attempts_[{g.x, g.y}] < config_.max_blocked_attempts * (1 + config_.blocked_goal_retries))
+          retry.push_back(static_cast<size_t>(g.y) * w + g.x);
+      }
+      if (!blocking_obstacles_.empty() || !retry.empty()) {
+        std::vector<uint8_t> open = traversable_without_keep_off, open_goal = goal;
+        for (const size_t i : retry) {
+          open[i] = cs.cells[i] == CellClass::kFree;
+          open_goal[i] = cs.cells[i] == CellClass::kUnknown;
+        }
+        // Reachable as the loop above would find it: from the robot's cell, or by an escape
+        // through the margin (the robot is often in it after a refusal).
+        const std::vector<int32_t> open_cost = ComputeExplorationTransform(cs.width, cs.height, open, open_goal);
+        if (open_cost[robot_index] != kUnreachable ||
+            !EscapePath(cs, open_cost, std::vector<uint8_t>(n, 0), rx, ry).empty()) {
+          if (!looked_here) return look_here(plan, "unknown space is reachable only past refused moves: pirouette");
+          if (!retry.empty()) {
+            std::erase_if(set_aside_, [&](const SetAsideGoal& g) {
+              return std::find(retry.begin(), retry.end(), static_cast<size_t>(g.y) * w + g.x) != retry.end();
+            });
+            for (const size_t i : retry) {
+              traversable[i] = open[i] && !near_blocking[i];
+              goal[i] = open_goal[i];
+            }
+            continue;
+          }
+        }
+      }
       plan.complete = true;
       plan.commands.push_back({MotionCommand::Kind::kStop});
       plan.reason = "no reachable unknown space remains (" + std::to_string(set_aside_.size()) +
@@ -232,17 +355,10 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     }
     // Piece-wise linear motion: one waypoint per run of equal steps.
     std::vector<std::pair<double, double>> waypoints;
-    const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
-    // First to the centre of the robot's cell, unless that step itself comes closer to an obstacle
-    // than the robot already is (it stands off-centre beside a wall): then straight on.
-    if (off_centre > 0.25 * cs.cell_size_m) {
-      const double to_centre = std::atan2(cs.CentreY(ry) - robot.y, cs.CentreX(rx) - robot.x);
-      const Pose2D step{robot.x, robot.y, to_centre};
-      if (IsPathClear(occupancy, step, off_centre) && !PassesBlockingObstacle(step, off_centre))
-        waypoints.emplace_back(cs.CentreX(rx), cs.CentreY(ry));
-    }
+    // First to the centre of the robot's cell (or the entry above; with neither, straight on).
+    if (centre_step && centre_step_clear && !entry) waypoints.emplace_back(cs.CentreX(rx), cs.CentreY(ry));
     for (size_t i = 1; i < path.size(); ++i) {
-      const bool run_ends = i + 1 == path.size() ||
+      const bool run_ends = i + 1 == path.size() || (entry && i == 1) ||
                             path[i + 1].first - path[i].first != path[i].first - path[i - 1].first ||
                             path[i + 1].second - path[i].second != path[i].second - path[i - 1].second;
       if (run_ends) waypoints.emplace_back(cs.CentreX(path[i].first), cs.CentreY(path[i].second));
@@ -335,6 +451,7 @@ proto::ExplorerState ExplorationPlanner::ToProto() const {
     out->mutable_cell()->set_x(g.x);
     out->mutable_cell()->set_y(g.y);
     out->set_reason(g.reason);
+    out->set_blocked(g.blocked);
   }
   for (const auto& [cell, attempts] : blocked_attempts_) {
     auto* out = state.add_blocked();
@@ -360,7 +477,7 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
   std::map<std::pair<int, int>, int> blocked;
   for (const auto& g : state.set_aside()) {
     if (g.cell().x() < 0 || g.cell().y() < 0) throw std::invalid_argument("explorer state: negative goal cell");
-    set_aside.push_back({g.cell().x(), g.cell().y(), g.reason()});
+    set_aside.push_back({g.cell().x(), g.cell().y(), g.reason(), g.blocked()});
   }
   for (const auto& b : state.blocked()) {
     if (b.cell().x() < 0 || b.cell().y() < 0 || b.attempts() < 0)

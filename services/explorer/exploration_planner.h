@@ -4,11 +4,17 @@
 //  2. marks every reachable unknown coarse cell as a goal and runs the exploration transform
 //     (exploration_transform.h); a robot standing inside the dilation margin (beside a wall after
 //     a pirouette) first steps out through cells that hold no obstacle themselves; if no goal can
-//     be reached even so, exploration is complete;
+//     be reached even so, exploration is complete, unless what the planner keeps from refused
+//     moves (their obstacles, the goals set aside after them) is all that stands in the way: then
+//     it looks all round and tries those goals again (blocked_goal_retries);
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
 //     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees;
 //     with pirouette_at_goal false, only a plan for unknown space next to the robot pirouettes).
+// A robot closer to an obstacle than its radius (the map moved under it, or a bump) first steps
+// straight out of it, and a robot in the margin moves straight to the nearest free cell where it
+// can: every move then keeps the full radius (plans from inside the radius began with a move
+// past the same obstacle again and again, and each refusal counted against a goal).
 // "Look before you move": before each straight move the caller asks IsPathClear with the latest
 // grid and replans if it is blocked (ReportBlocked counts that against the goal). PlanFrom puts
 // its own moves to the same test and plans around one that would be refused. Goals that stay
@@ -52,6 +58,7 @@ struct SetAsideGoal {
   int x = 0;  // coarse cell
   int y = 0;
   std::string reason;
+  bool blocked = false;  // set aside after refused moves (tried again, see blocked_goal_retries)
 };
 
 class ExplorationPlanner {
@@ -96,11 +103,21 @@ class ExplorationPlanner {
   const ExplorerConfig& config() const { return config_; }
 
  private:
-  void SetAside(int x, int y, std::string reason);
+  void SetAside(int x, int y, std::string reason, bool blocked = false);
   // True when the straight segment from `from` along its heading for distance_m passes within the
   // robot radius of an obstacle reported since the last pirouette.
   bool PassesBlockingObstacle(const Pose2D& from, double distance_m) const;
   bool IsSetAside(int x, int y) const;
+  // For a robot closer to an obstacle of the grid than its radius: one short straight step that
+  // gets it out (the most clearance, straight away from the obstacles or up to 90 degrees off),
+  // if one passes look before you move.
+  std::optional<Plan> StepOutOfRadius(const GridView& occupancy, const Pose2D& robot) const;
+  // For a robot outside the free configuration space: the nearest free cell that can reach a
+  // goal (finite cost) within 1 m and a straight move from the robot that passes look before you
+  // move, if any.
+  std::optional<std::pair<int, int>> DirectEntry(const GridView& occupancy, const CoarseGrid& cs,
+                                                 const std::vector<int32_t>& cost,
+                                                 const std::vector<uint8_t>& traversable, const Pose2D& robot) const;
 
   const ExplorerConfig config_;
   std::optional<Pose2D> last_pirouette_;

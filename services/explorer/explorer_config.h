@@ -14,6 +14,7 @@ struct ExplorerConfig {
   int pirouette_steps = 12;           // paper 003: 12 x 30 degrees
   bool pirouette_at_goal = true;      // paper 003: every plan ends with a pirouette
   int max_blocked_attempts = 3;       // look-before-you-move failures before a goal is set aside
+  int blocked_goal_retries = 1;       // times such a goal is tried again before exploration ends
 
   template <class V>
   void VisitFields(V& v) {
@@ -26,6 +27,8 @@ struct ExplorerConfig {
       "end every plan with a pirouette (paper 003); false: only where unknown space is still next to the robot");
     v("max_blocked_attempts", max_blocked_attempts,
       "blocked moves towards one goal before it is set aside");
+    v("blocked_goal_retries", blocked_goal_retries,
+      "times goals set aside after blocked moves are tried again (after a look all round) before exploration ends");
   }
   void Validate() const {
     Require(std::isfinite(robot_radius_m) && robot_radius_m >= 0 && robot_radius_m < 10,
@@ -34,6 +37,7 @@ struct ExplorerConfig {
     Require(min_unknown_cells_for_goal >= 1, "min_unknown_cells_for_goal", "must be >= 1");
     Require(pirouette_steps >= 1 && pirouette_steps <= 360, "pirouette_steps", "must be 1..360");
     Require(max_blocked_attempts >= 1, "max_blocked_attempts", "must be >= 1");
+    Require(blocked_goal_retries >= 0 && blocked_goal_retries <= 100, "blocked_goal_retries", "must be 0..100");
   }
 };
 

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -197,6 +198,10 @@ class ExplorerNode::Controller {
         // A blocked straight move bumped into something the map does not show (ReportBump).
         const bool bumped = awaiting_->command.kind == MotionCommand::Kind::kMove && pose_;
         const bool backwards = awaiting_->command.distance_m < 0;
+        spdlog::info("the base stopped command {} short{}", feedback.command_seq,
+                     bumped ? fmt::format(": bumped at ({:.2f}, {:.2f}, {:.2f})", RobotPose().x, RobotPose().y,
+                                          RobotPose().theta)
+                            : std::string());
         awaiting_.reset();
         if (plan_ && bumped) planner_.ReportBump(*plan_, RobotPose(), backwards);
         else if (plan_) planner_.ReportBlocked(*plan_);
@@ -309,15 +314,22 @@ class ExplorerNode::Controller {
     PublishStatusIfChanged();
   }
 
-  // Logs every goal the planner has newly set aside, with its reason.
+  // Logs every goal the planner has newly set aside, with its reason, and every goal it tries again.
   void NoteSetAside() {
     const auto& goals = planner_.set_aside_goals();
-    for (; logged_set_aside_ < goals.size(); ++logged_set_aside_) {
-      const SetAsideGoal& g = goals[logged_set_aside_];
+    const auto listed = [](const std::vector<SetAsideGoal>& list, const SetAsideGoal& g) {
+      return std::any_of(list.begin(), list.end(), [&](const SetAsideGoal& o) { return o.x == g.x && o.y == g.y; });
+    };
+    for (const SetAsideGoal& g : logged_set_aside_) {
+      if (!listed(goals, g)) spdlog::info("trying goal cell ({}, {}) again", g.x, g.y);
+    }
+    for (const SetAsideGoal& g : goals) {
+      if (listed(logged_set_aside_, g)) continue;
       spdlog::warn("set aside goal cell ({}, {}): {}", g.x, g.y, g.reason);
       reason_ = "set aside goal cell (" + std::to_string(g.x) + ", " + std::to_string(g.y) + "): " + g.reason;
       dirty_ = true;
     }
+    logged_set_aside_ = goals;
   }
 
   void PublishStatusIfChanged(bool force = false) {
@@ -342,9 +354,9 @@ class ExplorerNode::Controller {
     ReadStateFile(path, kStateKind, kStateVersion, state);  // throws StateFileError when corrupt
     planner_.LoadProto(state.planner());                     // validates the whole message
     command_seq_ = state.last_command_seq();
-    logged_set_aside_ = planner_.set_aside_goals().size();
-    spdlog::info("loaded explorer state from {}: {} goals set aside, last command {}", path, logged_set_aside_,
-                 command_seq_);
+    logged_set_aside_ = planner_.set_aside_goals();
+    spdlog::info("loaded explorer state from {}: {} goals set aside, last command {}", path,
+                 logged_set_aside_.size(), command_seq_);
   }
 
   void SaveState() {
@@ -384,7 +396,7 @@ class ExplorerNode::Controller {
   Clock::time_point fresh_grid_since_;
   uint64_t command_seq_ = 0;
   uint32_t commands_sent_ = 0;
-  size_t logged_set_aside_ = 0;
+  std::vector<SetAsideGoal> logged_set_aside_;
   msg::ExplorationState state_ = msg::ExplorationState::EXPLORATION_WAITING;
   double goal_x_m_ = 0.0, goal_y_m_ = 0.0;
   std::string reason_ = "waiting for a grid and a pose";
