@@ -37,6 +37,7 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
   grid.origin_y_m = occupancy.origin_y_m;
   grid.cells.assign(static_cast<size_t>(grid.width) * grid.height, CellClass::kFree);
   grid.obstacle.assign(grid.cells.size(), 0);
+  grid.unseen.assign(grid.cells.size(), 0);
   // Cells past the map edge count as occupied: the robot never plans to leave the map.
   for (int cy = 0; cy < grid.height; ++cy) {
     for (int cx = 0; cx < grid.width; ++cx) {
@@ -54,6 +55,7 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
         }
       }
       grid.obstacle[static_cast<size_t>(cy) * grid.width + cx] = raw > 0;
+      grid.unseen[static_cast<size_t>(cy) * grid.width + cx] = unk > 0;
       grid.cells[static_cast<size_t>(cy) * grid.width + cx] =
           occ > 0 ? CellClass::kOccupied
                   : (unk >= config.min_unknown_cells_for_goal ? CellClass::kUnknown : CellClass::kFree);

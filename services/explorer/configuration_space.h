@@ -24,6 +24,8 @@ struct CoarseGrid {
   // 1 where the block itself holds an occupied occupancy cell (or lies past the map edge): the
   // cells a robot that finds itself inside the dilation margin must not cross to get out.
   std::vector<uint8_t> obstacle;
+  // 1 where the block holds an unknown occupancy cell (whatever its class).
+  std::vector<uint8_t> unseen;
 
   CellClass At(int x, int y) const { return cells[static_cast<size_t>(y) * width + x]; }
   bool Contains(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }

@@ -242,6 +242,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   };
   int replans_left = kMaxReplansForBlockedMoves;
   std::optional<Plan> first_blocked;  // returned if keeping off its obstacle leaves nothing to explore
+  bool squeezing = false;             // planning through the dilation margin (below)
   // An off-centre robot first steps to the centre of its cell, unless that step itself comes
   // closer to an obstacle than the robot already is (it stands off-centre beside a wall).
   const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
@@ -300,6 +301,17 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
             continue;
           }
         }
+      }
+      // Gaps narrower than the robot plus both margins (or closed by a blurred wall) hide the
+      // last unknown space from the free cells: plan once more through the margin, over cells
+      // that hold no obstacle and nothing unseen themselves; the moves still keep the robot
+      // radius (checked below).
+      if (config_.squeeze_through_margin && !squeezing) {
+        squeezing = true;
+        for (size_t i = 0; i < n; ++i)
+          if (cs.cells[i] == CellClass::kOccupied && !cs.obstacle[i] && !cs.unseen[i] && !near_blocking[i])
+            traversable[i] = 1;
+        continue;
       }
       plan.complete = true;
       plan.commands.push_back({MotionCommand::Kind::kStop});
@@ -384,7 +396,8 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
                                config_.pirouette_steps});
     plan.has_target = true;
     plan.target = {x, y, theta};
-    plan.reason = "to the nearest unknown space, " + std::to_string(path.size() - 1) + " cells away";
+    plan.reason = "to the nearest unknown space, " + std::to_string(path.size() - 1) + " cells away" +
+                  (squeezing ? " through the margin" : "");
     // Look before you move, at planning time: a move of the plan that the caller's check would
     // refuse (the escape through the dilation margin, or the first step from an off-centre robot,
     // can pass closer to a wall than the robot radius) would count against goal after goal, each

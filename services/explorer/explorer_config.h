@@ -15,6 +15,7 @@ struct ExplorerConfig {
   bool pirouette_at_goal = true;      // paper 003: every plan ends with a pirouette
   int max_blocked_attempts = 3;       // look-before-you-move failures before a goal is set aside
   int blocked_goal_retries = 1;       // times such a goal is tried again before exploration ends
+  bool squeeze_through_margin = true; // before calling exploration complete, plan through the margin
 
   template <class V>
   void VisitFields(V& v) {
@@ -27,6 +28,8 @@ struct ExplorerConfig {
       "end every plan with a pirouette (paper 003); false: only where unknown space is still next to the robot");
     v("max_blocked_attempts", max_blocked_attempts,
       "blocked moves towards one goal before it is set aside");
+    v("squeeze_through_margin", squeeze_through_margin,
+      "when no unknown space is reachable over free cells, plan through the dilation margin (moves still keep the radius)");
     v("blocked_goal_retries", blocked_goal_retries,
       "times goals set aside after blocked moves are tried again (after a look all round) before exploration ends");
   }

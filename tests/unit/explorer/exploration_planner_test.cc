@@ -503,6 +503,38 @@ TEST(ExplorationPlannerTest, ObstaclesKeptOffAroundARobotInTheMarginDoNotEndExpl
   EXPECT_GT(again.target.x, 1.8);
 }
 
+TEST(ExplorationPlannerTest, SqueezesThroughADoorNarrowerThanTheMarginsBeforeCallingItComplete) {
+  // 10 m x 3 m, 5 cm cells: a known room, a wall at x = 7.5 m with a 30 cm door, unknown space
+  // beyond. The door is wide enough for the robot (radius 10 cm) to keep its radius, too narrow
+  // for any free exploration cell (10 cm cells, 15 cm margins), and the robot is too far from
+  // it for an escape through the margin.
+  TestGrid grid(200, 60, 0);
+  for (int y = 0; y < 60; ++y)
+    if (y < 27 || y > 32) grid.Set(150, y, 100);
+  for (int y = 1; y < 59; ++y)
+    for (int x = 151; x < 199; ++x) grid.Set(x, y, -1);
+  for (int y = 22; y < 38; ++y)  // floor seen through the door
+    for (int x = 151; x < 156; ++x) grid.Set(x, y, 0);
+  ExplorerConfig config = Config();
+  config.robot_radius_m = 0.1;
+  config.squeeze_through_margin = false;
+  const Pose2D robot{0.5, 1.5, 0.0};
+  EXPECT_TRUE(ExplorationPlanner(config).PlanFrom(grid.View(), robot).complete);
+  config.squeeze_through_margin = true;
+  ExplorationPlanner planner(config);
+  const Plan plan = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(plan.complete) << plan.reason;
+  EXPECT_NE(plan.reason.find("through the margin"), std::string::npos) << plan.reason;
+  EXPECT_GT(plan.target.x, 7.0);
+  EXPECT_NEAR(plan.target.y, 1.5, 0.2);
+  ExpectMovesClear(planner, grid.View(), plan, robot);
+  // A door narrower than the robot stays shut.
+  grid.Set(150, 28, 100);
+  grid.Set(150, 29, 100);
+  grid.Set(150, 30, 100);
+  EXPECT_TRUE(planner.PlanFrom(grid.View(), robot).complete);
+}
+
 // Heading of a plan's first straight move from `from`; none without one.
 std::optional<double> FirstMoveHeading(const Plan& plan, Pose2D from) {
   for (const MotionCommand& c : plan.commands) {
