@@ -44,9 +44,12 @@ void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s)
 }
 
 ExperienceMap::Observation ExperienceMap::ObservedFromCurrent(double relative_angle_rad) const {
+  // The robot faces relative_angle_rad from the experience it recognises (SetCurrent), so that
+  // experience faces accum_facing_ - relative_angle_rad. OpenRatSLAM adds the angle here and in
+  // on_set_experience alike, which puts twice the view's offset into every link it closes.
   const Experience& cur = experiences_[current_];
   return {std::hypot(accum_x_, accum_y_), ClipAngle(std::atan2(accum_y_, accum_x_) - cur.th_rad),
-          ClipAngle(accum_facing_ + relative_angle_rad - cur.th_rad), accum_time_};
+          ClipAngle(accum_facing_ - relative_angle_rad - cur.th_rad), accum_time_};
 }
 
 int ExperienceMap::FindLink(uint32_t from, uint32_t to) const {
@@ -215,7 +218,8 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
 void ExperienceMap::OptimiseGraph(int iterations) {
   last_correction_ = OptimisePoseGraph(experiences_, links_,
                                        {config_.exp_graph_link_sigma_m, config_.exp_graph_link_sigma_rad,
-                                        config_.exp_graph_closure_sigma_m, config_.exp_graph_closure_sigma_rad},
+                                        config_.exp_graph_closure_sigma_m, config_.exp_graph_closure_sigma_rad,
+                                        config_.exp_graph_closure_robust_phi},
                                        iterations);
   graph_pending_ = false;
   frames_since_graph_ = 0;

@@ -1,6 +1,8 @@
 #pragma once
 // Configuration of the experience map. OpenRatSLAM keys keep their names and defaults.
 
+#include <cmath>
+
 #include "common/config/config_error.h"
 
 namespace rslam::experience_map {
@@ -43,6 +45,7 @@ struct ExperienceMapConfig {
   double exp_graph_link_sigma_rad = 0.002;
   double exp_graph_closure_sigma_m = 0.1;
   double exp_graph_closure_sigma_rad = 0.01;
+  double exp_graph_closure_robust_phi = 0.0;  // 0: every recognition weighs by its sigmas alone
 
   template <class V>
   void VisitFields(V& v) {
@@ -68,6 +71,8 @@ struct ExperienceMapConfig {
     v("exp_graph_link_sigma_rad", exp_graph_link_sigma_rad, "uncertainty of an odometric link's facing (rad)");
     v("exp_graph_closure_sigma_m", exp_graph_closure_sigma_m, "uncertainty of a recognised place's position (m)");
     v("exp_graph_closure_sigma_rad", exp_graph_closure_sigma_rad, "uncertainty of a recognised place's facing (rad)");
+    v("exp_graph_closure_robust_phi", exp_graph_closure_robust_phi,
+      "> 0: recognitions far off the rest of the map (chi^2 >> phi) weigh less (dynamic covariance scaling)");
   }
 
   void Validate() const {
@@ -86,6 +91,8 @@ struct ExperienceMapConfig {
     Require(exp_graph_link_sigma_rad > 0, "exp_graph_link_sigma_rad", "must be positive");
     Require(exp_graph_closure_sigma_m > 0, "exp_graph_closure_sigma_m", "must be positive");
     Require(exp_graph_closure_sigma_rad > 0, "exp_graph_closure_sigma_rad", "must be positive");
+    Require(std::isfinite(exp_graph_closure_robust_phi) && exp_graph_closure_robust_phi >= 0,
+            "exp_graph_closure_robust_phi", "must be >= 0");
   }
 };
 

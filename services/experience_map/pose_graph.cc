@@ -66,7 +66,16 @@ double OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector
       jt << c, s, 0,  //
           -s, c, 0,   //
           0, 0, 1;
-      const Eigen::DiagonalMatrix<double, 3> w(l.closes_loop ? closure_weight : link_weight);
+      Eigen::Vector3d weight = l.closes_loop ? closure_weight : link_weight;
+      // Dynamic covariance scaling (Agarwal et al., ICRA 2013): a recognition that disagrees with
+      // the rest of the map by far more than its uncertainty (a wrong loop closure) pulls on it
+      // with a weight scaled by s^2, s = min(1, 2 phi / (phi + chi^2)).
+      if (l.closes_loop && sigmas.closure_robust_phi > 0) {
+        const double chi2 = error.dot(weight.cwiseProduct(error));
+        const double scale = std::min(1.0, 2 * sigmas.closure_robust_phi / (sigmas.closure_robust_phi + chi2));
+        weight *= scale * scale;
+      }
+      const Eigen::DiagonalMatrix<double, 3> w(weight);
       const int at[2] = {index[l.from_id], index[l.to_id]};
       const Eigen::Matrix3d* j[2] = {&jf, &jt};
       for (int a = 0; a < 2; ++a) {

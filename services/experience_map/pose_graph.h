@@ -26,6 +26,7 @@ namespace rslam::experience_map {
 struct PoseGraphSigmas {
   double link_m, link_rad;        // odometric link
   double closure_m, closure_rad;  // link made by recognising a place
+  double closure_robust_phi = 0;   // > 0: scale down closures that disagree (see pose_graph.cc)
 };
 
 // Runs `iterations` Gauss-Newton steps over all experiences and links; returns the largest

@@ -161,6 +161,31 @@ TEST(ExperienceMap, RecognitionTakesTheConfiguredShareOfTheHeadingDifference) {
   EXPECT_NEAR(std::abs(HeadingAfterRecognising(0.5, 3.1, -3.1 - kPi / 2)), kPi, 1e-9);
 }
 
+TEST(ExperienceMap, ALinkToARecognisedPlaceAgreesWithTheHeadingTheRecognitionGives) {
+  // Experiences 0, 1 and 2, a metre apart going east, all face east. The robot turns 0.3 rad
+  // left at 2 and recognises 0 (a teleport: positions aside) with its view turned 0.3 rad: it
+  // faces 0's heading + 0.3, as dead reckoning says, so the new link 2 -> 0 says the two
+  // experiences face the same way.
+  ExperienceMap map(NoCorrection());
+  map.Integrate(0.0, -kPi / 2, 1.0);  // the map starts facing +y: turn east first
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(1, 0));
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(2, 1));
+  ASSERT_NEAR(map.experiences()[0].th_rad, 0.0, 1e-12);
+  ASSERT_NEAR(map.experiences()[2].th_rad, 0.0, 1e-12);
+  map.Integrate(0.0, 0.3, 1.0);
+  ExperienceAction back = LinkTo(Kind::kLink, 2, 0);
+  back.relative_angle_rad = 0.3;
+  map.Apply(back);
+  const Link& link = map.links().back();
+  ASSERT_EQ(link.from_id, 2u);
+  ASSERT_EQ(link.to_id, 0u);
+  EXPECT_NEAR(link.facing_rad, 0.0, 1e-12);  // OpenRatSLAM's sign: 0.6
+  EXPECT_NEAR(map.RobotPose().th_rad, 0.3, 1e-12);
+}
+
 // Experience 0 at the origin, experience 1 two metres east; the robot drives back 1.7 m west
 // (dead reckoned at x = 0.3) and recognises experience 0. No map correction.
 Pose2 PoseAfterRecognising(double position_correction) {
@@ -406,7 +431,72 @@ TEST(ExperienceMap, LeastSquaresWaitsForThePeriodAfterTheLastCorrection) {
   EXPECT_EQ(map.last_correction(), 0.0);
 }
 
+// A 10 m square of 0.1 m odometric links (exact) and one recognition from the last experience to
+// the first that is wrong: it says the first is `off_m` further along and turned `off_rad`.
+proto::ExperienceMap LongSquareWithAWrongClosure(double off_m, double off_rad) {
+  proto::ExperienceMap m;
+  constexpr int kPerSide = 100;
+  for (int i = 0; i < 4 * kPerSide; ++i) {
+    const int side = i / kPerSide, along = i % kPerSide;
+    const double th = side * kPi / 2;
+    const double cx[] = {0, 10, 10, 0}, cy[] = {0, 0, 10, 10};
+    auto* e = m.add_experiences();
+    e->set_x_m(cx[side] + 0.1 * along * std::cos(th));
+    e->set_y_m(cy[side] + 0.1 * along * std::sin(th));
+    e->set_th_rad(ClipAngle(th));
+  }
+  const int n = 4 * kPerSide;
+  for (int i = 0; i < n; ++i) {
+    auto* l = m.add_links();
+    l->set_from_id(i);
+    l->set_to_id((i + 1) % n);
+    const bool corner = (i + 1) % kPerSide == 0;
+    l->set_d_m(i == n - 1 ? 0.1 + off_m : 0.1);
+    l->set_facing_rad((corner ? kPi / 2 : 0.0) + (i == n - 1 ? off_rad : 0.0));
+    l->set_traversals(1);
+    l->set_closes_loop(i == n - 1);
+  }
+  m.set_has_current(true);
+  m.set_current_id(n - 1);
+  return m;
+}
+
+// Largest distance an experience moved from where its odometry put it.
+double LargestMove(const ExperienceMap& map, const proto::ExperienceMap& before) {
+  double largest = 0.0;
+  for (size_t i = 0; i < map.experiences().size(); ++i)
+    largest = std::max(largest, std::hypot(map.experiences()[i].x_m - before.experiences(i).x_m(),
+                                           map.experiences()[i].y_m - before.experiences(i).y_m()));
+  return largest;
+}
+
+TEST(ExperienceMap, LeastSquaresWithDynamicCovarianceScalingShrugsOffAWrongRecognition) {
+  const proto::ExperienceMap wrong = LongSquareWithAWrongClosure(3.0, 1.0);
+  ExperienceMapConfig config = LeastSquares(1);
+  ExperienceMap plain(config);
+  plain.Load(wrong);
+  plain.OptimiseGraph(10);
+  config.exp_graph_closure_robust_phi = 300;
+  ExperienceMap robust(config);
+  robust.Load(wrong);
+  robust.OptimiseGraph(10);
+  EXPECT_GT(LargestMove(plain, wrong), 5.0);   // bent by the wrong recognition (8.3 m)
+  EXPECT_LT(LargestMove(robust, wrong), 1.0);  // close to its odometry (0.57 m)
+  // A right recognition of a drifted loop (0.3 m, 0.02 rad off) is taken all the same.
+  const proto::ExperienceMap drifted = LongSquareWithAWrongClosure(0.3, 0.02);
+  ExperienceMap plain_right(LeastSquares(1)), robust_right(config);
+  plain_right.Load(drifted);
+  robust_right.Load(drifted);
+  plain_right.OptimiseGraph(10);
+  robust_right.OptimiseGraph(10);
+  EXPECT_GT(LargestMove(robust_right, drifted), 0.2);
+  EXPECT_NEAR(LargestMove(robust_right, drifted), LargestMove(plain_right, drifted), 0.01);
+}
+
 TEST(ExperienceMap, LeastSquaresKeysOutOfRangeAreRefused) {
+  ExperienceMapConfig phi = LeastSquares(1);
+  phi.exp_graph_closure_robust_phi = -1;
+  EXPECT_THROW(phi.Validate(), ConfigError);
   ExperienceMapConfig period = LeastSquares(0);
   EXPECT_THROW(period.Validate(), ConfigError);
   ExperienceMapConfig sigma = LeastSquares(1);
