@@ -6,7 +6,9 @@
 //     a pirouette) first steps out through cells that hold no obstacle themselves; if no goal can
 //     be reached even so, exploration is complete, unless what the planner keeps from refused
 //     moves (their obstacles, the goals set aside after them) is all that stands in the way: then
-//     it looks all round and tries those goals again (blocked_goal_retries);
+//     it looks all round and tries those goals again (blocked_goal_retries); or unless a way
+//     through the margin itself leads to unknown space (squeeze_through_margin: doors narrower
+//     than the robot plus both margins);
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
 //     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees;

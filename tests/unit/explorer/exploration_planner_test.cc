@@ -174,17 +174,6 @@ TEST(ExplorationPlannerTest, MovingAwayFromAnObstacleInsideTheRadiusIsClear) {
   EXPECT_FALSE(planner.IsPathClear(grid.View(), robot, -0.3));  // back into it
 }
 
-// Where the robot is after the straight moves and turns of `plan` from `from`.
-Pose2D Execute(const Plan& plan, Pose2D from) {
-  for (const MotionCommand& c : plan.commands) {
-    if (c.kind == Kind::kRotate) from.theta += c.angle_rad;
-    if (c.kind != Kind::kMove) continue;
-    from.x += c.distance_m * std::cos(from.theta);
-    from.y += c.distance_m * std::sin(from.theta);
-  }
-  return from;
-}
-
 // Every straight move of `plan` from `from` passes look before you move.
 void ExpectMovesClear(const ExplorationPlanner& planner, const GridView& grid, const Plan& plan, Pose2D from) {
   for (const MotionCommand& c : plan.commands) {
