@@ -274,8 +274,9 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       // blocked_goal_retries times each.
       std::vector<size_t> retry;
       for (const SetAsideGoal& g : set_aside_) {
-        if (g.blocked && cs.Contains(g.x, g.y) &&
-            blocked_attempts_[{g.x, g.y}] < config_.max_blocked_attempts * (1 + config_.blocked_goal_retries))
+        const auto attempts = blocked_attempts_.find({g.x, g.y});
+        if (g.blocked && cs.Contains(g.x, g.y) && attempts != blocked_attempts_.end() &&
+            attempts->second < config_.max_blocked_attempts * (1 + config_.blocked_goal_retries))
           retry.push_back(static_cast<size_t>(g.y) * w + g.x);
       }
       if (!blocking_obstacles_.empty() || !retry.empty()) {

@@ -28,10 +28,10 @@ struct ExplorerConfig {
       "end every plan with a pirouette (paper 003); false: only where unknown space is still next to the robot");
     v("max_blocked_attempts", max_blocked_attempts,
       "blocked moves towards one goal before it is set aside");
-    v("squeeze_through_margin", squeeze_through_margin,
-      "when no unknown space is reachable over free cells, plan through the dilation margin (moves still keep the radius)");
     v("blocked_goal_retries", blocked_goal_retries,
       "times goals set aside after blocked moves are tried again (after a look all round) before exploration ends");
+    v("squeeze_through_margin", squeeze_through_margin,
+      "when no unknown space is reachable over free cells, plan through the dilation margin (moves still keep the radius)");
   }
   void Validate() const {
     Require(std::isfinite(robot_radius_m) && robot_radius_m >= 0 && robot_radius_m < 10,

@@ -198,11 +198,14 @@ class ExplorerNode::Controller {
         // A blocked straight move bumped into something the map does not show (ReportBump).
         const bool bumped = awaiting_->command.kind == MotionCommand::Kind::kMove && pose_;
         const bool backwards = awaiting_->command.distance_m < 0;
-        spdlog::info("the base stopped command {} short{}", feedback.command_seq,
-                     bumped ? fmt::format(": bumped at ({:.2f}, {:.2f}, {:.2f})", RobotPose().x, RobotPose().y,
-                                          RobotPose().theta)
-                            : std::string());
         awaiting_.reset();
+        if (bumped) {
+          const Pose2D at = RobotPose();
+          spdlog::info("the base stopped command {} short: bumped at ({:.2f}, {:.2f}, {:.2f})", feedback.command_seq,
+                       at.x, at.y, at.theta);
+        } else {
+          spdlog::info("the base stopped command {} short", feedback.command_seq);
+        }
         if (plan_ && bumped) planner_.ReportBump(*plan_, RobotPose(), backwards);
         else if (plan_) planner_.ReportBlocked(*plan_);
         plan_.reset();
