@@ -215,14 +215,16 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
   }
 }
 
-void ExperienceMap::OptimiseGraph(int iterations) {
-  last_correction_ = OptimisePoseGraph(experiences_, links_,
-                                       {config_.exp_graph_link_sigma_m, config_.exp_graph_link_sigma_rad,
-                                        config_.exp_graph_closure_sigma_m, config_.exp_graph_closure_sigma_rad,
-                                        config_.exp_graph_closure_robust_phi},
-                                       iterations);
+PoseGraphResult ExperienceMap::OptimiseGraph(int iterations, double stop_below) {
+  const PoseGraphResult result = OptimisePoseGraph(
+      experiences_, links_,
+      {config_.exp_graph_link_sigma_m, config_.exp_graph_link_sigma_rad, config_.exp_graph_closure_sigma_m,
+       config_.exp_graph_closure_sigma_rad, config_.exp_graph_closure_robust_phi},
+      iterations, stop_below);
+  last_correction_ = result.largest_change;
   graph_pending_ = false;
   frames_since_graph_ = 0;
+  return result;
 }
 
 double ExperienceMap::RelaxLink(uint32_t index) {

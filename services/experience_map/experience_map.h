@@ -66,6 +66,13 @@ inline double ClipAngle(double a) {
   return a;
 }
 
+// What a least-squares correction (pose_graph.h) did.
+struct PoseGraphResult {
+  double largest_change = 0.0;  // over all steps (m or rad)
+  int steps = 0;                // Gauss-Newton steps taken
+  bool converged = false;       // the last step moved nothing by more than stop_below
+};
+
 struct Pose2 {
   double x_m = 0.0, y_m = 0.0, th_rad = 0.0;
 };
@@ -101,9 +108,10 @@ class ExperienceMap {
   // `iterations` full sweeps over all links (OpenRatSLAM iterate()); resets the sliced sweep to
   // a sweep boundary and drops the local region.
   void Relax(int iterations);
-  // The least-squares correction of pose_graph.h (`iterations` Gauss-Newton steps) now, whatever
-  // exp_graph_optimisation says; e.g. before export.
-  void OptimiseGraph(int iterations);
+  // The least-squares correction of pose_graph.h (up to `iterations` Gauss-Newton steps, fewer
+  // once a step moves nothing by more than stop_below) now, whatever exp_graph_optimisation
+  // says; e.g. before export.
+  PoseGraphResult OptimiseGraph(int iterations, double stop_below = 0.0);
 
   // Shortest path by travel time over links (either direction) from `from_id` to `goal_id`,
   // both included; empty when unreachable. Throws std::invalid_argument for unknown ids.

@@ -34,17 +34,20 @@ std::vector<int> FreeIndices(size_t n, const std::vector<Link>& links) {
 
 }  // namespace
 
-double OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
-                         const PoseGraphSigmas& sigmas, int iterations) {
+PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
+                                  const PoseGraphSigmas& sigmas, int iterations, double stop_below) {
   const std::vector<int> index = FreeIndices(experiences.size(), links);
   const int size = static_cast<int>(3 * std::count_if(index.begin(), index.end(), [](int i) { return i >= 0; }));
-  if (size == 0) return 0.0;
+  PoseGraphResult result;
+  if (size == 0) {
+    result.converged = true;
+    return result;
+  }
   const Eigen::Vector3d link_weight(1 / (sigmas.link_m * sigmas.link_m), 1 / (sigmas.link_m * sigmas.link_m),
                                     1 / (sigmas.link_rad * sigmas.link_rad));
   const Eigen::Vector3d closure_weight(1 / (sigmas.closure_m * sigmas.closure_m),
                                        1 / (sigmas.closure_m * sigmas.closure_m),
                                        1 / (sigmas.closure_rad * sigmas.closure_rad));
-  double largest = 0.0;
   std::vector<Eigen::Triplet<double>> triplets;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   for (int iteration = 0; iteration < iterations; ++iteration) {
@@ -96,6 +99,7 @@ double OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector
     solver.factorize(hessian);
     if (solver.info() != Eigen::Success) break;  // cannot happen with every part anchored
     const Eigen::VectorXd step = solver.solve(-gradient);
+    double moved = 0.0;
     for (size_t e = 0; e < experiences.size(); ++e) {
       if (index[e] < 0) continue;
       const Eigen::Vector3d d = step.segment<3>(index[e]);
@@ -103,10 +107,16 @@ double OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector
       x.x_m += d[0];
       x.y_m += d[1];
       x.th_rad = ClipAngle(x.th_rad + d[2]);
-      largest = std::max({largest, std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+      moved = std::max({moved, std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
+    }
+    result.largest_change = std::max(result.largest_change, moved);
+    ++result.steps;
+    if (moved <= stop_below) {
+      result.converged = true;
+      break;
     }
   }
-  return largest;
+  return result;
 }
 
 }  // namespace rslam::experience_map

@@ -29,9 +29,9 @@ struct PoseGraphSigmas {
   double closure_robust_phi = 0;   // > 0: scale down closures that disagree (see pose_graph.cc)
 };
 
-// Runs `iterations` Gauss-Newton steps over all experiences and links; returns the largest
-// change (m or rad) it made. Links must name existing experiences.
-double OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
-                         const PoseGraphSigmas& sigmas, int iterations);
+// Runs up to `iterations` Gauss-Newton steps over all experiences and links, fewer when a step
+// moves nothing by more than stop_below (m or rad). Links must name existing experiences.
+PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
+                                  const PoseGraphSigmas& sigmas, int iterations, double stop_below = 0.0);
 
 }  // namespace rslam::experience_map

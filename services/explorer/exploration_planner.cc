@@ -21,6 +21,12 @@ double DistanceToSegment(double px, double py, double x0, double y0, double sx, 
   return std::hypot(px - (x0 + t * sx), py - (y0 + t * sy));
 }
 
+// An occupied cell, or one past the map's edge: what a move must keep the robot radius from.
+bool Blocks(const GridView& occupancy, int cx, int cy) {
+  return cx < 0 || cy < 0 || cx >= occupancy.width || cy >= occupancy.height ||
+         occupancy.ClassAt(cx, cy) == CellClass::kOccupied;
+}
+
 // Plans made again within one PlanFrom because one of their own moves passed an obstacle.
 constexpr int kMaxReplansForBlockedMoves = 20;
 
@@ -122,9 +128,7 @@ std::optional<Plan> ExplorationPlanner::StepOutOfRadius(const GridView& occupanc
     double nearest = r;
     for (int cy = cy0; cy <= cy0 + span; ++cy)
       for (int cx = cx0; cx <= cx0 + span; ++cx) {
-        const bool obstacle = cx < 0 || cy < 0 || cx >= occupancy.width || cy >= occupancy.height ||
-                              occupancy.ClassAt(cx, cy) == CellClass::kOccupied;
-        if (!obstacle) continue;
+        if (!Blocks(occupancy, cx, cy)) continue;
         const double dx = x - (occupancy.origin_x_m + (cx + 0.5) * res);
         const double dy = y - (occupancy.origin_y_m + (cy + 0.5) * res);
         const double d = std::hypot(dx, dy);
@@ -431,10 +435,6 @@ std::optional<std::pair<double, double>> ExplorationPlanner::ObstacleOnPath(cons
   const int cy_min = static_cast<int>(std::floor((std::min(y0, y1) - r - occupancy.origin_y_m) / res));
   const int cy_max = static_cast<int>(std::floor((std::max(y0, y1) + r - occupancy.origin_y_m) / res));
   const double sx = x1 - x0, sy = y1 - y0;
-  auto blocking = [&](int cx, int cy) {
-    return cx < 0 || cy < 0 || cx >= occupancy.width || cy >= occupancy.height ||
-           occupancy.ClassAt(cx, cy) == CellClass::kOccupied;
-  };
   auto centre = [&](int cx, int cy) {
     return std::pair{occupancy.origin_x_m + (cx + 0.5) * res, occupancy.origin_y_m + (cy + 0.5) * res};
   };
@@ -443,13 +443,13 @@ std::optional<std::pair<double, double>> ExplorationPlanner::ObstacleOnPath(cons
   double start_clearance = r;
   for (int cy = cy_min; cy <= cy_max; ++cy)
     for (int cx = cx_min; cx <= cx_max; ++cx)
-      if (blocking(cx, cy)) {
+      if (Blocks(occupancy, cx, cy)) {
         const auto [px, py] = centre(cx, cy);
         start_clearance = std::min(start_clearance, std::hypot(px - x0, py - y0));
       }
   for (int cy = cy_min; cy <= cy_max; ++cy) {
     for (int cx = cx_min; cx <= cx_max; ++cx) {
-      if (!blocking(cx, cy)) continue;
+      if (!Blocks(occupancy, cx, cy)) continue;
       const auto [px, py] = centre(cx, cy);
       const double d = DistanceToSegment(px, py, x0, y0, sx, sy);
       if (d <= r && d < start_clearance - 1e-9) return std::pair{px, py};

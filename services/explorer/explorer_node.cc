@@ -203,11 +203,11 @@ class ExplorerNode::Controller {
           const Pose2D at = RobotPose();
           spdlog::info("the base stopped command {} short: bumped at ({:.2f}, {:.2f}, {:.2f})", feedback.command_seq,
                        at.x, at.y, at.theta);
+          if (plan_) planner_.ReportBump(*plan_, at, backwards);
         } else {
           spdlog::info("the base stopped command {} short", feedback.command_seq);
+          if (plan_) planner_.ReportBlocked(*plan_);
         }
-        if (plan_ && bumped) planner_.ReportBump(*plan_, RobotPose(), backwards);
-        else if (plan_) planner_.ReportBlocked(*plan_);
         plan_.reset();
         reason_ = "the base reported command " + std::to_string(feedback.command_seq) + " blocked";
         NoteSetAside();

@@ -204,11 +204,9 @@ RelaxResult RatSlamRunner::RelaxToConvergence(double relative_tolerance, int max
     return result;
   }
   if (map_.config().exp_graph_optimisation) {  // least squares: Gauss-Newton steps, not sweeps
-    while (result.sweeps < kGraphSteps && !result.converged) {
-      map_.OptimiseGraph(1);
-      ++result.sweeps;
-      result.converged = map_.last_correction() <= kGraphStepTolerance;
-    }
+    const experience_map::PoseGraphResult steps = map_.OptimiseGraph(kGraphSteps, kGraphStepTolerance);
+    result.sweeps = steps.steps;
+    result.converged = steps.converged;
     const double next = RmsLinkError();
     result.last_change_m = std::abs(next - error);
     result.rms_link_error_m = next;

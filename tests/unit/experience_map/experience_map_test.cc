@@ -395,6 +395,25 @@ TEST(ExperienceMap, LeastSquaresLeavesAConsistentMapAlone) {
   EXPECT_LT(map.MaxLinkError(), 1e-12);
 }
 
+TEST(ExperienceMap, LeastSquaresStopsOnceAStepMovesNothing) {
+  ExperienceMap at_once(LeastSquares(1));
+  at_once.Load(SquareWithAnOffClosure(0.4));
+  const PoseGraphResult result = at_once.OptimiseGraph(20, 1e-9);
+  EXPECT_TRUE(result.converged);
+  EXPECT_GT(result.steps, 1);
+  EXPECT_LT(result.steps, 20);
+  EXPECT_GT(result.largest_change, 0.02);  // the 0.4 m spread over the square (0.043 m)
+  // The same as that many single steps.
+  ExperienceMap stepwise(LeastSquares(1));
+  stepwise.Load(SquareWithAnOffClosure(0.4));
+  for (int i = 0; i < result.steps; ++i) stepwise.OptimiseGraph(1);
+  for (size_t e = 0; e < at_once.experiences().size(); ++e) {
+    EXPECT_NEAR(at_once.experiences()[e].x_m, stepwise.experiences()[e].x_m, 1e-12) << e;
+    EXPECT_NEAR(at_once.experiences()[e].y_m, stepwise.experiences()[e].y_m, 1e-12) << e;
+    EXPECT_NEAR(at_once.experiences()[e].th_rad, stepwise.experiences()[e].th_rad, 1e-12) << e;
+  }
+}
+
 TEST(ExperienceMap, LeastSquaresKeepsTheFirstExperienceOfEveryUnjoinedMapInPlace) {
   ExperienceMap a(LeastSquares(1));
   a.Load(SquareWithAnOffClosure(0.4));
