@@ -62,6 +62,7 @@ proto::OccupancyState AnchoredProfileMap::ToProto() const {
   g->set_min_probability(sc.min_probability);
   g->set_max_probability(sc.max_probability);
   g->set_reliable_range_m(sc.reliable_range_m);
+  g->set_footprint_radius_m(sc.footprint_radius_m);
   for (const AnchoredProfile& p : profiles_) {
     auto* out = state.add_profiles();
     out->set_experience_id(p.experience_id);
@@ -84,7 +85,7 @@ AnchoredProfileMap AnchoredProfileMap::FromProto(const proto::OccupancyState& st
   const auto& g = state.grid();
   GridConfig gc{g.resolution_m(), g.width(), g.height(), g.origin_x_m(), g.origin_y_m()};
   SensorModelConfig sc{g.hit_probability(), g.miss_probability(), g.blind_probability(),
-                       g.min_probability(), g.max_probability(), g.reliable_range_m()};
+                       g.min_probability(), g.max_probability(), g.reliable_range_m(), g.footprint_radius_m()};
   try {
     gc.Validate();
     sc.Validate();

@@ -25,6 +25,8 @@ void SensorModelConfig::Validate() const {
   Require(prob(miss_probability) && miss_probability < 0.5, "miss_probability", "must be in (0, 0.5)");
   Require(prob(blind_probability) && blind_probability >= 0.5, "blind_probability", "must be in [0.5, 1)");
   Require(std::isfinite(reliable_range_m) && reliable_range_m > 0, "reliable_range_m", "must be positive");
+  Require(std::isfinite(footprint_radius_m) && footprint_radius_m >= 0 && footprint_radius_m <= 5,
+          "footprint_radius_m", "must be in [0, 5]");
 }
 
 OccupancyGrid::OccupancyGrid(GridConfig grid, SensorModelConfig sensor)
@@ -47,6 +49,7 @@ OccupancyGrid::OccupancyGrid(GridConfig grid, SensorModelConfig sensor)
     blind_table_[v] = (v == kUnknownValue ? LogOddsToValue(blind) : static_cast<uint16_t>(v)) + kUpdateMarker;
   }
   values_.assign(static_cast<size_t>(grid_.width) * grid_.height, kUnknownValue);
+  footprint_.assign(values_.size(), 0);
 }
 
 double OccupancyGrid::ValueToLogOdds(uint16_t value) const {
@@ -61,6 +64,7 @@ uint16_t OccupancyGrid::LogOddsToValue(double log_odds) const {
 }
 
 double OccupancyGrid::Probability(CellIndex c) const {
+  if (UnderFootprint(c)) return sensor_.min_probability;
   const uint16_t v = Value(c);
   return v == kUnknownValue ? 0.5 : ProbabilityFromLogOdds(ValueToLogOdds(v));
 }
@@ -70,7 +74,24 @@ CellIndex OccupancyGrid::CellOf(double x_m, double y_m) const {
           static_cast<int>(std::floor((y_m - grid_.origin_y_m) / grid_.resolution_m))};
 }
 
-void OccupancyGrid::Clear() { std::fill(values_.begin(), values_.end(), kUnknownValue); }
+void OccupancyGrid::Clear() {
+  std::fill(values_.begin(), values_.end(), kUnknownValue);
+  std::fill(footprint_.begin(), footprint_.end(), 0);
+}
+
+// Cells whose centre lies within footprint_radius_m of (gx, gy) (grid units).
+void OccupancyGrid::MarkFootprint(double gx, double gy) {
+  const double r = sensor_.footprint_radius_m / grid_.resolution_m;
+  const int x0 = std::max(0, static_cast<int>(std::floor(gx - r)));
+  const int x1 = std::min(grid_.width - 1, static_cast<int>(std::floor(gx + r)));
+  const int y0 = std::max(0, static_cast<int>(std::floor(gy - r)));
+  const int y1 = std::min(grid_.height - 1, static_cast<int>(std::floor(gy + r)));
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const double ex = x + 0.5 - gx, ey = y + 0.5 - gy;
+      if (ex * ex + ey * ey <= r * r) footprint_[static_cast<size_t>(y) * grid_.width + x] = 1;
+    }
+}
 
 inline void OccupancyGrid::ApplyTable(size_t index, const uint16_t* table) {
   uint16_t& v = values_[index];
@@ -139,6 +160,7 @@ int64_t OccupancyGrid::InsertProfile(const RadialObstacleProfile& profile, const
     }
   }
   for (size_t index : updated_) values_[index] -= kUpdateMarker;
+  if (sensor_.footprint_radius_m > 0) MarkFootprint(gx, gy);
   return static_cast<int64_t>(updated_.size());
 }
 
@@ -149,8 +171,10 @@ std::vector<int8_t> OccupancyGrid::ToRosCells() const {
                                  ? int8_t{-1}
                                  : static_cast<int8_t>(std::lround(100.0 * ProbabilityFromLogOdds(
                                                                              ValueToLogOdds(static_cast<uint16_t>(v)))));
+  const auto footprint_percent = static_cast<int8_t>(std::lround(100.0 * sensor_.min_probability));
   std::vector<int8_t> out(values_.size());
-  for (size_t i = 0; i < values_.size(); ++i) out[i] = probability_percent[values_[i]];
+  for (size_t i = 0; i < values_.size(); ++i)
+    out[i] = footprint_[i] ? footprint_percent : probability_percent[values_[i]];
   return out;
 }
 

@@ -11,6 +11,7 @@ GridConfig Grid() { return GridConfig{0.02, 200, 200, -2.0, -2.0}; }
 SensorModelConfig Model() {
   SensorModelConfig m;
   m.reliable_range_m = 0.5;
+  m.footprint_radius_m = 0.05;
   return m;
 }
 // An obstacle 0.315 m straight ahead of the robot, nothing else.
@@ -29,6 +30,7 @@ TEST(AnchoredProfileMapTest, MovingAnExperienceMovesItsProfilesCells) {
   map.AddProfile(7, experience, robot, ObstacleAhead());
   const CellIndex before = map.grid().CellOf(0.61, 0.425);
   EXPECT_GT(map.grid().Probability(before), 0.6);
+  EXPECT_TRUE(map.grid().UnderFootprint(map.grid().CellOf(0.61, 0.11)));
 
   // Loop closure moves experience 7 by (-1, +0.2) and turns it by +90 degrees.
   const std::map<uint64_t, Pose2D> corrected{{7, {-0.5, 0.2, M_PI / 2}}};
@@ -41,6 +43,9 @@ TEST(AnchoredProfileMapTest, MovingAnExperienceMovesItsProfilesCells) {
   // facing -x, so the obstacle is now at (-0.925, 0.31) and the old cell is unknown again.
   EXPECT_FALSE(map.grid().IsKnown(before));
   EXPECT_GT(map.grid().Probability(map.grid().CellOf(-0.925, 0.31)), 0.6);
+  // The floor under the robot moves with it.
+  EXPECT_FALSE(map.grid().UnderFootprint(map.grid().CellOf(0.61, 0.11)));
+  EXPECT_TRUE(map.grid().UnderFootprint(map.grid().CellOf(-0.61, 0.31)));
 }
 
 TEST(AnchoredProfileMapTest, UnknownExperiencesKeepTheirPoseOnRebuild) {

@@ -107,6 +107,42 @@ TEST(OccupancyGridTest, RaysLeavingTheGridAreClipped) {
   EXPECT_LT(grid.Probability({9, 5}), 0.5);
 }
 
+TEST(OccupancyGridTest, TheFloorUnderTheRobotStaysFreeWhateverWasSeenThere) {
+  // A wall at x = 0.65 (cell 6), seen many times from (0.25, 0.55); then the robot stands on it.
+  for (double radius : {0.0, 0.12}) {
+    SensorModelConfig model = Model();
+    model.footprint_radius_m = radius;
+    OccupancyGrid grid(SmallGrid(), model);
+    for (int i = 0; i < 10; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.4f), kRobot);
+    ASSERT_GT(grid.Probability({6, 5}), 0.9);
+    grid.InsertProfile(OneBin(BinStatus::kUnobserved, 0.0f), {0.65, 0.55, 0.0});
+    // Seen again afterwards: the footprint still wins, and only where the robot's body was.
+    for (int i = 0; i < 10; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.4f), kRobot);
+    if (radius == 0.0) {
+      EXPECT_GT(grid.Probability({6, 5}), 0.9);
+      continue;
+    }
+    // Cell centres within 0.12 m of (0.65, 0.55): (6, 5) and its four neighbours, not diagonals.
+    for (CellIndex c : {CellIndex{6, 5}, CellIndex{5, 5}, CellIndex{7, 5}, CellIndex{6, 4}, CellIndex{6, 6}}) {
+      EXPECT_DOUBLE_EQ(grid.Probability(c), model.min_probability) << c.x << "," << c.y;
+      EXPECT_EQ(grid.ToRosCells()[c.y * 10 + c.x], 12) << c.x << "," << c.y;
+    }
+    EXPECT_FALSE(grid.UnderFootprint({7, 6}));
+    EXPECT_FALSE(grid.IsKnown({7, 6}));
+    EXPECT_GT(grid.LogOdds({6, 5}), 2.0);  // the evidence is kept, only overruled
+    grid.Clear();
+    EXPECT_FALSE(grid.UnderFootprint({6, 5}));
+  }
+  SensorModelConfig bad = Model();
+  bad.footprint_radius_m = -0.1;
+  try {
+    OccupancyGrid grid(SmallGrid(), bad);
+    FAIL() << "a negative footprint radius was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("footprint_radius_m"), std::string::npos) << e.what();
+  }
+}
+
 TEST(OccupancyGridTest, RejectsNonFinitePoseAndBadRanges) {
   OccupancyGrid grid(SmallGrid(), Model());
   EXPECT_THROW(grid.InsertProfile(OneBin(BinStatus::kFree, 0.3f), {NAN, 0, 0}), std::invalid_argument);
