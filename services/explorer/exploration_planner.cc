@@ -193,6 +193,31 @@ std::optional<std::pair<int, int>> ExplorationPlanner::DirectEntry(const GridVie
   return std::nullopt;
 }
 
+std::vector<std::pair<double, double>> ExplorationPlanner::Straighten(
+    const GridView& occupancy, const CoarseGrid& cs, const std::vector<uint8_t>& traversable,
+    const std::vector<std::pair<double, double>>& waypoints) const {
+  // The straight move from a to b: every cell it crosses (sampled at a quarter cell) usable, and clear.
+  const auto usable = [&](std::pair<double, double> a, std::pair<double, double> b) {
+    const double length = std::hypot(b.first - a.first, b.second - a.second);
+    const int samples = static_cast<int>(std::ceil(length / (0.25 * cs.cell_size_m)));
+    for (int k = 0; k <= samples; ++k) {
+      const double t = samples == 0 ? 0.0 : static_cast<double>(k) / samples;
+      const int x = cs.CellX(a.first + t * (b.first - a.first)), y = cs.CellY(a.second + t * (b.second - a.second));
+      if (!cs.Contains(x, y) || !traversable[static_cast<size_t>(y) * cs.width + x]) return false;
+    }
+    const Pose2D from{a.first, a.second, std::atan2(b.second - a.second, b.first - a.first)};
+    return IsPathClear(occupancy, from, length) && !PassesBlockingObstacle(from, length);
+  };
+  std::vector<std::pair<double, double>> out{waypoints.front()};
+  for (size_t i = 0; i + 1 < waypoints.size();) {
+    size_t next = i + 1;
+    while (next + 1 < waypoints.size() && usable(waypoints[i], waypoints[next + 1])) ++next;
+    out.push_back(waypoints[next]);
+    i = next;
+  }
+  return out;
+}
+
 Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
   if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
   const CoarseGrid cs = BuildConfigurationSpace(occupancy, config_);
@@ -379,6 +404,11 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
                             path[i + 1].first - path[i].first != path[i].first - path[i - 1].first ||
                             path[i + 1].second - path[i].second != path[i].second - path[i - 1].second;
       if (run_ends) waypoints.emplace_back(cs.CentreX(path[i].first), cs.CentreY(path[i].second));
+    }
+    if (config_.straighten_paths) {
+      waypoints.insert(waypoints.begin(), {robot.x, robot.y});
+      waypoints = Straighten(occupancy, cs, traversable, waypoints);
+      waypoints.erase(waypoints.begin());
     }
     double x = robot.x, y = robot.y, theta = robot.theta;
     std::optional<std::pair<double, double>> blocked;  // on a move of this plan

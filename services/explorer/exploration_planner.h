@@ -13,6 +13,10 @@
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
 //     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees;
 //     with pirouette_at_goal false, only a plan for unknown space next to the robot pirouettes).
+//     With straighten_paths, corners are cut: a waypoint is skipped where the straight move from
+//     the one before to the one after stays on cells the descent may use and passes look before
+//     you move (the 8-connected descent zigzags across open floor, and each corner is a turn on
+//     the spot: a fifth of a second per 10 degrees, and the odometry's least reliable motion).
 // A robot closer to an obstacle than its radius (the map moved under it, or a bump) first steps
 // straight out of it, and a robot in the margin moves straight to the nearest free cell where it
 // can: every move then keeps the full radius (plans from inside the radius began with a move
@@ -110,6 +114,10 @@ class ExplorationPlanner {
   // robot radius of an obstacle reported since the last pirouette.
   bool PassesBlockingObstacle(const Pose2D& from, double distance_m) const;
   bool IsSetAside(int x, int y) const;
+  // The straighten_paths shortcut of the header comment: waypoints[0] is where the robot stands.
+  std::vector<std::pair<double, double>> Straighten(const GridView& occupancy, const CoarseGrid& cs,
+                                                    const std::vector<uint8_t>& traversable,
+                                                    const std::vector<std::pair<double, double>>& waypoints) const;
   // For a robot closer to an obstacle of the grid than its radius: one short straight step that
   // gets it out (the most clearance, straight away from the obstacles or up to 90 degrees off),
   // if one passes look before you move.

@@ -16,6 +16,7 @@ struct ExplorerConfig {
   int max_blocked_attempts = 3;       // look-before-you-move failures before a goal is set aside
   int blocked_goal_retries = 1;       // times such a goal is tried again before exploration ends
   bool squeeze_through_margin = true; // before calling exploration complete, plan through the margin
+  bool straighten_paths = true;       // cut the grid path's corners where a straight move is clear
 
   template <class V>
   void VisitFields(V& v) {
@@ -32,6 +33,8 @@ struct ExplorerConfig {
       "times goals set aside after blocked moves are tried again (after a look all round) before exploration ends");
     v("squeeze_through_margin", squeeze_through_margin,
       "when no unknown space is reachable over free cells, plan through the dilation margin (moves still keep the radius)");
+    v("straighten_paths", straighten_paths,
+      "skip a waypoint of the grid path where the straight move past it stays on the path's cells and is clear");
   }
   void Validate() const {
     Require(std::isfinite(robot_radius_m) && robot_radius_m >= 0 && robot_radius_m < 10,

@@ -79,6 +79,66 @@ TEST(ExplorationPlannerTest, StraightCorridorBecomesOneTurnAndOneMove) {
   EXPECT_EQ(plan.goal_x, 25);
 }
 
+// The moves of a plan from `robot`, as segments; every one must pass look before you move.
+std::vector<std::pair<Pose2D, double>> Moves(const ExplorationPlanner& planner, const GridView& view,
+                                             const Plan& plan, Pose2D at) {
+  std::vector<std::pair<Pose2D, double>> moves;
+  for (const MotionCommand& c : plan.commands) {
+    if (c.kind == Kind::kRotate) at.theta += c.angle_rad;
+    if (c.kind != Kind::kMove) continue;
+    EXPECT_TRUE(planner.IsPathClear(view, at, c.distance_m)) << "move " << moves.size();
+    moves.push_back({at, c.distance_m});
+    at.x += c.distance_m * std::cos(at.theta);
+    at.y += c.distance_m * std::sin(at.theta);
+  }
+  return moves;
+}
+
+TEST(ExplorationPlannerTest, StraightensTheGridPathWhereAStraightMoveIsClear) {
+  // Open floor: unknown space 2.2 m ahead and 0.9 m to the left. The descent on the 8-connected
+  // grid goes diagonally, then straight (or zigzags); one straight move gets there.
+  TestGrid open(60, 60, 0);
+  for (int y = 18; y < 28; ++y)
+    for (int x = 50; x < 59; ++x) open.Set(x, y, -1);
+  // A wall with a door at its top end between the robot and unknown space at the bottom right:
+  // the way goes up through the door and down again, and no move may cut through the wall.
+  TestGrid wall(60, 60, 0);
+  for (int y = 1; y < 40; ++y) wall.Set(30, y, 100);
+  for (int y = 1; y < 10; ++y)
+    for (int x = 50; x < 59; ++x) wall.Set(x, y, -1);
+  const Pose2D robot{0.35, 0.35, 0.0};
+  for (const TestGrid* grid : {&open, &wall}) {
+    size_t moves_along_the_grid = 0;
+    for (bool straighten : {false, true}) {
+      ExplorerConfig config = Config();
+      config.straighten_paths = straighten;
+      ExplorationPlanner planner(config);
+      const Plan plan = planner.PlanFrom(grid->View(), robot);
+      ASSERT_FALSE(plan.complete);
+      const auto moves = Moves(planner, grid->View(), plan, robot);
+      for (const auto& [from, distance] : moves) {  // none crosses the wall's line below the door
+        if (grid != &wall) break;
+        const double x1 = from.x + distance * std::cos(from.theta), y1 = from.y + distance * std::sin(from.theta);
+        if ((from.x - 1.525) * (x1 - 1.525) < 0) {
+          const double y_at_wall = from.y + (y1 - from.y) * (1.525 - from.x) / (x1 - from.x);
+          EXPECT_GT(y_at_wall, 2.0 + config.robot_radius_m) << "straighten " << straighten;
+        }
+      }
+      if (!straighten) {
+        moves_along_the_grid = moves.size();
+        continue;
+      }
+      if (grid == &open) {
+        EXPECT_GE(moves_along_the_grid, 2u);
+        EXPECT_EQ(moves.size(), 1u);
+      } else {
+        EXPECT_LT(moves.size(), moves_along_the_grid);
+        EXPECT_LE(moves.size(), 3u);  // up to the door, through it, down to the unknown
+      }
+    }
+  }
+}
+
 TEST(ExplorationPlannerTest, WithoutPirouetteAtGoalOnlyUnknownSpaceNextToTheRobotIsLookedAt) {
   TestGrid grid(60, 12, 0);
   for (int y = 1; y < 11; ++y)

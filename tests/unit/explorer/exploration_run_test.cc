@@ -78,6 +78,7 @@ bool SegmentIsFree(const World& world, const Pose2D& from, double distance) {
 struct RunResult {
   bool complete = false;
   int plans = 0, pirouettes = 0, moves = 0, blocked = 0;
+  double turned_rad = 0.0, driven_m = 0.0;  // turns of the plans (pirouettes not counted)
   std::vector<int8_t> known;
 };
 
@@ -95,6 +96,7 @@ RunResult Explore(const World& world, const ExplorerConfig& config, Pose2D robot
     for (const MotionCommand& cmd : plan.commands) {
       if (cmd.kind == MotionCommand::Kind::kRotate) {
         robot.theta = std::remainder(robot.theta + cmd.angle_rad, 2 * M_PI);
+        run.turned_rad += std::abs(cmd.angle_rad);
       } else if (cmd.kind == MotionCommand::Kind::kMove) {
         if (!planner.IsPathClear(world.View(run.known), robot, cmd.distance_m)) {
           planner.ReportBlocked(plan);
@@ -104,6 +106,7 @@ RunResult Explore(const World& world, const ExplorerConfig& config, Pose2D robot
         EXPECT_TRUE(SegmentIsFree(world, robot, cmd.distance_m)) << "drove through an obstacle";
         robot.x += cmd.distance_m * std::cos(robot.theta);
         robot.y += cmd.distance_m * std::sin(robot.theta);
+        run.driven_m += std::abs(cmd.distance_m);
         ++run.moves;
       } else if (cmd.kind == MotionCommand::Kind::kPirouette) {
         Sense(world, run.known, robot, sensor_range, rays);
@@ -199,17 +202,29 @@ TEST(ExplorationRunTest, ExploresTheUwbRoomMapUntilNoReachableUnknownRemains) {
       if (d < best) { best = d; start = {truth.CentreX(x), truth.CentreY(y), 0.0}; }
     }
   ASSERT_LT(best, 1e9);
-  const RunResult run = Explore(world, config, start, 2.5, 1080, 3000);
-  EXPECT_TRUE(run.complete) << "after " << run.plans << " plans";
-  int reachable = 0;
-  const int unknown = CountUnknownReachableFreeCells(world, config, start, run.known, &reachable);
-  EXPECT_EQ(unknown, 0) << "of " << reachable << " reachable free cells";
-  EXPECT_GT(reachable, 10000);
-  RecordProperty("plans", run.plans);
-  RecordProperty("pirouettes", run.pirouettes);
-  RecordProperty("moves", run.moves);
-  std::printf("uwb-room: %d plans, %d pirouettes, %d moves, %d blocked, %d reachable free cells\n", run.plans,
-              run.pirouettes, run.moves, run.blocked, reachable);
+  // Along the grid path and straightened: both explore the whole room; straightened, the robot
+  // turns on the spot less.
+  double turned_along_the_grid = 0.0;
+  for (bool straighten : {false, true}) {
+    config.straighten_paths = straighten;
+    const RunResult run = Explore(world, config, start, 2.5, 1080, 3000);
+    EXPECT_TRUE(run.complete) << "after " << run.plans << " plans";
+    int reachable = 0;
+    const int unknown = CountUnknownReachableFreeCells(world, config, start, run.known, &reachable);
+    EXPECT_EQ(unknown, 0) << "of " << reachable << " reachable free cells";
+    EXPECT_GT(reachable, 10000);
+    if (straighten) {
+      EXPECT_LT(run.turned_rad, turned_along_the_grid);
+      RecordProperty("plans", run.plans);
+      RecordProperty("pirouettes", run.pirouettes);
+      RecordProperty("moves", run.moves);
+    } else {
+      turned_along_the_grid = run.turned_rad;
+    }
+    std::printf("uwb-room, straighten_paths %d: %d plans, %d pirouettes, %d moves (%.1f m), turned %.1f rad, %d blocked, "
+                "%d reachable free cells\n",
+                straighten, run.plans, run.pirouettes, run.moves, run.driven_m, run.turned_rad, run.blocked, reachable);
+  }
 }
 
 }  // namespace
