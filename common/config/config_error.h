@@ -24,4 +24,14 @@ inline void Require(bool ok, std::string_view key, std::string_view reason) {
   if (!ok) throw ConfigError(std::string(key), std::string(reason));
 }
 
+// Validates a nested section; its errors name the key as "prefix.key".
+template <class T>
+void ValidateNested(const T& section, const std::string& prefix) {
+  try {
+    section.Validate();
+  } catch (const ConfigError& e) {
+    throw ConfigError(prefix + "." + e.key(), e.reason());
+  }
+}
+
 }  // namespace rslam

@@ -208,19 +208,22 @@ class OccupancyNode::Mapper {
                        const_cast<uint8_t*>(image.data.data()), image.step);
     const Pose2D robot{pose.x_m, pose.y_m, pose.theta_rad};
     const Pose2D experience{pose.experience_x_m, pose.experience_y_m, pose.experience_theta_rad};
+    AnchoredProfile anchored{pose.current_experience_id, Between(experience, robot), experience, {}};
     try {
-      RadialObstacleProfile rop = pipeline_.ProfileFromImage(view);
-      map_.AddProfile(pose.current_experience_id, experience, robot, std::move(rop));
+      anchored.profile = pipeline_.ProfileFromImage(view);
+      if (map_.IsNewView(pose.current_experience_id, experience, robot, config_.profile_min_spacing_m,
+                         config_.profile_min_turn_rad)) {
+        map_.AddProfile(pose.current_experience_id, experience, robot, anchored.profile);
+        dirty_ = true;
+      }
     } catch (const std::exception& e) {  // std::invalid_argument, or cv::Exception on odd input
       context_.Reject("frame", e.what());
       return;
     }
-    dirty_ = true;
     latest_map_version_ = std::max(latest_map_version_, pose.map_version);
     last_header_ = pose.header;
     context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
-    profile_pub_->Publish(
-        ToMessage(pose.header, map_.profiles().back(), static_cast<float>(config_.sensor.reliable_range_m)));
+    profile_pub_->Publish(ToMessage(pose.header, anchored, static_cast<float>(config_.sensor.reliable_range_m)));
     if (frames_since_rebuild_ < std::numeric_limits<int>::max() / 2) ++frames_since_rebuild_;
     if (pending_correction_ && frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames)
       ApplyPendingCorrection();  // publishes the grid when it rebuilds

@@ -60,6 +60,8 @@ struct OccupancyNodeConfig {
   double rebuild_min_shift_m = 0.005;   // experience moves smaller than this do not rebuild
   double rebuild_min_turn_rad = 0.002;
   int rebuild_at_most_every_n_frames = 10;  // a rebuild replays every profile: bound how often
+  double profile_min_spacing_m = 0.0;  // a frame's profile joins the map only this far from the last
+  double profile_min_turn_rad = 0.0;   // ... or turned this much (anchored_profile_map.h IsNewView)
   bool export_maps_on_shutdown = true;  // grid.pgm, grid.yaml, occupancy.png in the state dir
 
   template <class V>
@@ -76,14 +78,17 @@ struct OccupancyNodeConfig {
     v("rebuild_min_turn_rad", rebuild_min_turn_rad, "... or turned at least this much (rad)");
     v("rebuild_at_most_every_n_frames", rebuild_at_most_every_n_frames,
       "while the map keeps correcting, rebuild the grid at most once every this many frames");
+    v("profile_min_spacing_m", profile_min_spacing_m,
+      "a frame's profile joins the map only if the robot moved this far from the last one's pose (m) ...");
+    v("profile_min_turn_rad", profile_min_turn_rad, "... or turned this much (rad), or the experience changed");
     v("export_maps_on_shutdown", export_maps_on_shutdown,
       "write grid.pgm, grid.yaml and occupancy.png into the state dir on shutdown");
   }
 
   void Validate() const {
     pipeline.Validate();  // keys of the pipeline are at the top of the section already
-    Nested(grid, "grid");
-    Nested(sensor, "sensor");
+    ValidateNested(grid, "grid");
+    ValidateNested(sensor, "sensor");
     Require(grid_publish_every_n_frames >= 1, "grid_publish_every_n_frames", "must be >= 1");
     Require(join_buffer_frames >= 1 && join_buffer_frames <= 10000, "join_buffer_frames", "must be 1..10000");
     Require(rebuild_at_most_every_n_frames >= 0, "rebuild_at_most_every_n_frames", "must be >= 0");
@@ -91,16 +96,10 @@ struct OccupancyNodeConfig {
             "must be >= 0");
     Require(std::isfinite(rebuild_min_turn_rad) && rebuild_min_turn_rad >= 0, "rebuild_min_turn_rad",
             "must be >= 0");
-  }
-
- private:
-  template <class T>
-  static void Nested(const T& cfg, const std::string& prefix) {
-    try {
-      cfg.Validate();
-    } catch (const ConfigError& e) {
-      throw ConfigError(prefix + "." + e.key(), e.reason());
-    }
+    Require(std::isfinite(profile_min_spacing_m) && profile_min_spacing_m >= 0, "profile_min_spacing_m",
+            "must be >= 0");
+    Require(std::isfinite(profile_min_turn_rad) && profile_min_turn_rad >= 0, "profile_min_turn_rad",
+            "must be >= 0");
   }
 };
 

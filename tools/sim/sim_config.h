@@ -203,16 +203,6 @@ struct SimConfig {
     ValidateNested(motion, "motion");
     ValidateNested(wheel_odometry, "wheel_odometry");
   }
-
- private:
-  template <class T>
-  static void ValidateNested(const T& cfg, const std::string& prefix) {
-    try {
-      cfg.Validate();
-    } catch (const ConfigError& e) {
-      throw ConfigError(prefix + "." + e.key(), e.reason());
-    }
-  }
 };
 
 }  // namespace rslam::sim

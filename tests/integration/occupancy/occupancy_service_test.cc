@@ -16,6 +16,8 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
+#include "common/persistence/state_file.h"
+#include "services/occupancy/proto/occupancy_state.pb.h"
 #include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 #include <opencv2/imgproc.hpp>
@@ -331,6 +333,23 @@ TEST_F(OccupancyServiceTest, SigtermSavesStateAndExportsTheGrid) {
   auto restarted = Start();
   EXPECT_TRUE(AwaitGrid([](const msg::OccupancyGrid& g) { return ShowsWallAhead(g, kWallX); }))
       << restarted->Output();
+}
+
+TEST_F(OccupancyServiceTest, FramesThatShowNothingNewArePublishedButNotKept) {
+  // Ten frames from one pose: each gets its profile; with a spacing, only the first joins the map.
+  for (const bool spaced : {false, true}) {
+    std::vector<std::string> args;
+    if (spaced)
+      args = {"--set", "occupancy.profile_min_spacing_m=0.08", "--set", "occupancy.profile_min_turn_rad=0.25"};
+    auto service = Start(args);
+    for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+    service->Signal(SIGTERM);
+    ASSERT_EQ(service->WaitExit(10s), 0) << service->Output();
+    occupancy::proto::OccupancyState state;
+    ReadStateFile(state_dir_.path() / "occupancy.pb", "rslam.occupancy.OccupancyState", 1, state);
+    EXPECT_EQ(state.profiles_size(), spaced ? 1 : 10);
+    std::filesystem::remove(state_dir_.path() / "occupancy.pb");
+  }
 }
 
 TEST_F(OccupancyServiceTest, RestartAfterSigkillReloadsTheLastSavedStateAndContinues) {
