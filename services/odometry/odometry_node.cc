@@ -21,6 +21,7 @@ class OdometryNode::Impl {
     if (config.floor.enabled) {
       boundary_ = std::make_unique<occupancy::ObstacleProfilePipeline>(config.floor.boundary);
       floor_ = std::make_unique<FloorOdometry>(config.floor.registration);
+      if (config.floor.manhattan.enabled) manhattan_ = std::make_unique<ManhattanHeading>(config.floor.manhattan);
     }
   }
 
@@ -142,12 +143,19 @@ class OdometryNode::Impl {
     prior.dx = velocity.vtrans * dt_s;
     prior.dtheta = velocity.vrot * dt_s;
     const PlanarMotion motion = floor_->Update(boundary_points_, prior);
-    const double turn_in_place = config_.visual.turn_in_place_vrot_radps;
-    if (config_.floor.turns_from_profiles && turn_in_place > 0 && std::abs(velocity.vrot) >= turn_in_place) return;
     if (dt_s <= 0) return;
-    // Unregistered, the floor odometry returns the prior with its constant-velocity forward step.
-    velocity.vtrans = motion.dx / dt_s;
-    if (motion.measured) velocity.vrot = motion.dtheta / dt_s;
+    const double turn_in_place = config_.visual.turn_in_place_vrot_radps;
+    if (!(config_.floor.turns_from_profiles && turn_in_place > 0 && std::abs(velocity.vrot) >= turn_in_place)) {
+      // Unregistered, the floor odometry returns the prior with its constant-velocity forward step.
+      velocity.vtrans = motion.dx / dt_s;
+      if (motion.measured) velocity.vrot = motion.dtheta / dt_s;
+    }
+    if (manhattan_) {
+      heading_ += velocity.vrot * dt_s;
+      const double correction = manhattan_->Update(boundary_points_, heading_);
+      heading_ += correction;
+      velocity.vrot += correction / dt_s;
+    }
   }
 
   ServiceContext& context_;
@@ -157,6 +165,10 @@ class OdometryNode::Impl {
   VisualOdometry odometry_;
   std::unique_ptr<occupancy::ObstacleProfilePipeline> boundary_;  // floor odometry only
   std::unique_ptr<FloorOdometry> floor_;
+  // Heading held to the walls (floor odometry only): the heading integrated from the published
+  // turns, kept across restarts (downstream integrates them on).
+  std::unique_ptr<ManhattanHeading> manhattan_;
+  double heading_ = 0.0;
   std::vector<Eigen::Vector2d> boundary_points_;
   std::optional<int64_t> previous_stamp_ns_;
   cv::Size previous_size_;

@@ -8,6 +8,7 @@
 #include "common/config/config_error.h"
 #include "services/occupancy/obstacle_profile_pipeline.h"
 #include "services/odometry/floor_odometry.h"
+#include "services/odometry/manhattan_heading.h"
 #include "services/odometry/visual_odometry_config.h"
 
 namespace rslam::odometry {
@@ -23,6 +24,7 @@ struct FloorOdometryNodeConfig {
   bool turns_from_profiles = true;
   occupancy::ObstacleProfileConfig boundary;
   FloorOdometryConfig registration;
+  ManhattanHeadingConfig manhattan;
 
   template <class V>
   void VisitFields(V& v) {
@@ -31,11 +33,13 @@ struct FloorOdometryNodeConfig {
       "frames the column profiles call a turn on the spot keep the profiles' motion");
     boundary.VisitFields(v);
     registration.VisitFields(v);
+    v("manhattan", manhattan, "hold the heading to the walls' two perpendicular directions (manhattan_heading.h)");
   }
   void Validate() const {
     if (!enabled) return;
     boundary.Validate();
     registration.Validate();
+    ValidateNested(manhattan, "manhattan");
   }
 };
 
@@ -61,7 +65,7 @@ struct OdometryNodeConfig {
     visual.Validate();
     Require(std::isfinite(max_frame_gap_s) && max_frame_gap_s > 0, "max_frame_gap_s", "must be positive");
     Require(max_pixels >= 1, "max_pixels", "must be >= 1");
-    floor.Validate();
+    ValidateNested(floor, "floor_odometry");
   }
 };
 
