@@ -47,7 +47,6 @@ inline GridConfig SimulatorMatchedGridConfig() {
 inline SensorModelConfig SimulatorMatchedSensorConfig() {
   SensorModelConfig s;
   s.reliable_range_m = 1.5;
-  s.footprint_radius_m = 0.18;  // the simulator's robot
   return s;
 }
 

@@ -3,9 +3,8 @@
 // directions (the Manhattan-world assumption); the floor boundary shows the walls in view, so the
 // heading the odometry has integrated can be compared, modulo 90 degrees, with the direction of
 // the walls it saw at the start, and the difference (drift, if the wall is one of those) taken out
-// a little at a time. Visual odometry's heading drifts while the robot drives straight (on eight
-// demo paths, 1-2 rad over 350-560 m, its sign changing from run to run), and that drift, not the
-// distance, makes most of the map's error.
+// a little at a time. Visual odometry's heading drifts (1-2 rad over a demo run of 350-560 m, its
+// sign changing from run to run), and that drift, not the distance, makes most of the map's error.
 //
 // Per frame: the boundary points (robot frame, bearing order) within max_range_m give wall
 // directions from point pairs baseline_points apart on one boundary line (no gap between them
@@ -17,10 +16,13 @@
 // are tried). After that a wall direction within max_offset_rad of an axis moves the heading
 // gain of the way onto it; one farther off is some other wall and is ignored.
 //
-// Rendered again along three recorded demo paths (visual odometry, 28,000-34,000 frames), dead
-// reckoning's ATE 2.32 / 3.04 / 0.93 -> 1.31 / 1.68 / 0.51 m (gain 0.2; see deploy/config/demo.yaml).
-// A building whose walls meet at other angles gets no benefit; one with many such walls could be
-// pulled wrong by walls within max_offset_rad of an axis: it is off unless configured.
+// Seven recorded demo paths (visual odometry, 11,000-50,000 frames) rendered again with it:
+// dead-reckoning ATE 2.32 / 0.93 / 3.04 / 4.10 -> 1.23 / 0.51 / 1.68 / 3.62 m, but 3.72 / 2.49 /
+// 3.03 -> 4.52 / 3.31 / 3.13 m. Nine frames in ten of those that give a wall direction give the
+// building's axes within 0.05 rad; what fails is holding to them: the axes are fixed from the
+// first frames, whose heading has already drifted (0.19 rad on one path), and a drift past
+// max_offset_rad between walls loses them. So it is off unless configured (the demo's too). A
+// building whose walls meet at other angles gets no benefit; walls a little off its axes pull wrong.
 
 #include <Eigen/Core>
 

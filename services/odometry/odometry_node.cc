@@ -151,10 +151,15 @@ class OdometryNode::Impl {
       if (motion.measured) velocity.vrot = motion.dtheta / dt_s;
     }
     if (manhattan_) {
+      const bool had_axes = manhattan_->axes().has_value();
       heading_ += velocity.vrot * dt_s;
       const double correction = manhattan_->Update(boundary_points_, heading_);
       heading_ += correction;
       velocity.vrot += correction / dt_s;
+      if (!had_axes && manhattan_->axes())
+        spdlog::info("frame {}: the walls' axes are at {:.3f} rad (mod pi/2) in the odometry frame; "
+                     "holding the heading to them",
+                     image.header.frame_seq, *manhattan_->axes());
     }
   }
 
