@@ -6,15 +6,6 @@ namespace {
 cv::Vec3b ToColour(const std::vector<int>& bgr) {
   return cv::Vec3b(static_cast<uchar>(bgr.at(0)), static_cast<uchar>(bgr.at(1)), static_cast<uchar>(bgr.at(2)));
 }
-
-template <class T>
-void ValidateNested(const T& cfg, const std::string& prefix) {
-  try {
-    cfg.Validate();
-  } catch (const ConfigError& e) {
-    throw ConfigError(prefix + "." + e.key(), e.reason());
-  }
-}
 }  // namespace
 
 void ObstacleProfileConfig::Validate() const {
