@@ -195,7 +195,7 @@ std::optional<std::pair<int, int>> ExplorationPlanner::DirectEntry(const GridVie
 
 std::vector<std::pair<double, double>> ExplorationPlanner::Straighten(
     const GridView& occupancy, const CoarseGrid& cs, const std::vector<uint8_t>& traversable,
-    const std::vector<std::pair<double, double>>& waypoints) const {
+    std::pair<double, double> start, const std::vector<std::pair<double, double>>& waypoints) const {
   // The straight move from a to b: every cell it crosses (sampled at a quarter cell) usable, and clear.
   const auto usable = [&](std::pair<double, double> a, std::pair<double, double> b) {
     const double length = std::hypot(b.first - a.first, b.second - a.second);
@@ -208,12 +208,12 @@ std::vector<std::pair<double, double>> ExplorationPlanner::Straighten(
     const Pose2D from{a.first, a.second, std::atan2(b.second - a.second, b.first - a.first)};
     return IsPathClear(occupancy, from, length) && !PassesBlockingObstacle(from, length);
   };
-  std::vector<std::pair<double, double>> out{waypoints.front()};
-  for (size_t i = 0; i + 1 < waypoints.size();) {
-    size_t next = i + 1;
-    while (next + 1 < waypoints.size() && usable(waypoints[i], waypoints[next + 1])) ++next;
+  std::vector<std::pair<double, double>> out;
+  std::pair<double, double> from = start;
+  for (size_t next = 0; next < waypoints.size(); ++next) {
+    while (next + 1 < waypoints.size() && usable(from, waypoints[next + 1])) ++next;
     out.push_back(waypoints[next]);
-    i = next;
+    from = waypoints[next];
   }
   return out;
 }
@@ -405,11 +405,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
                             path[i + 1].second - path[i].second != path[i].second - path[i - 1].second;
       if (run_ends) waypoints.emplace_back(cs.CentreX(path[i].first), cs.CentreY(path[i].second));
     }
-    if (config_.straighten_paths) {
-      waypoints.insert(waypoints.begin(), {robot.x, robot.y});
-      waypoints = Straighten(occupancy, cs, traversable, waypoints);
-      waypoints.erase(waypoints.begin());
-    }
+    if (config_.straighten_paths) waypoints = Straighten(occupancy, cs, traversable, {robot.x, robot.y}, waypoints);
     double x = robot.x, y = robot.y, theta = robot.theta;
     std::optional<std::pair<double, double>> blocked;  // on a move of this plan
     for (const auto& [wx, wy] : waypoints) {

@@ -114,9 +114,11 @@ class ExplorationPlanner {
   // robot radius of an obstacle reported since the last pirouette.
   bool PassesBlockingObstacle(const Pose2D& from, double distance_m) const;
   bool IsSetAside(int x, int y) const;
-  // The straighten_paths shortcut of the header comment: waypoints[0] is where the robot stands.
+  // The straighten_paths shortcut of the header comment: the waypoints from `start` (where the
+  // robot stands) that remain.
   std::vector<std::pair<double, double>> Straighten(const GridView& occupancy, const CoarseGrid& cs,
                                                     const std::vector<uint8_t>& traversable,
+                                                    std::pair<double, double> start,
                                                     const std::vector<std::pair<double, double>>& waypoints) const;
   // For a robot closer to an obstacle of the grid than its radius: one short straight step that
   // gets it out (the most clearance, straight away from the obstacles or up to 90 degrees off),

@@ -31,10 +31,9 @@ void AnchoredProfileMap::AddProfile(uint64_t experience_id, const Pose2D& experi
   profiles_.push_back(std::move(anchored));
 }
 
-bool AnchoredProfileMap::IsNewView(uint64_t experience_id, const Pose2D& experience_pose, const Pose2D& robot_pose,
-                                   double min_spacing_m, double min_turn_rad) const {
+bool AnchoredProfileMap::IsNewView(uint64_t experience_id, const Pose2D& offset, double min_spacing_m,
+                                   double min_turn_rad) const {
   if (profiles_.empty() || profiles_.back().experience_id != experience_id) return true;
-  const Pose2D offset = Between(experience_pose, robot_pose);
   const Pose2D& last = profiles_.back().offset;
   return std::hypot(offset.x - last.x, offset.y - last.y) >= min_spacing_m ||
          std::abs(std::remainder(offset.theta - last.theta, 2.0 * M_PI)) >= min_turn_rad;

@@ -211,7 +211,7 @@ class OccupancyNode::Mapper {
     AnchoredProfile anchored{pose.current_experience_id, Between(experience, robot), experience, {}};
     try {
       anchored.profile = pipeline_.ProfileFromImage(view);
-      if (map_.IsNewView(pose.current_experience_id, experience, robot, config_.profile_min_spacing_m,
+      if (map_.IsNewView(pose.current_experience_id, anchored.offset, config_.profile_min_spacing_m,
                          config_.profile_min_turn_rad)) {
         map_.AddProfile(pose.current_experience_id, experience, robot, anchored.profile);
         dirty_ = true;

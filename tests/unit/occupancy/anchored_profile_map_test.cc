@@ -51,17 +51,17 @@ TEST(AnchoredProfileMapTest, MovingAnExperienceMovesItsProfilesCells) {
 TEST(AnchoredProfileMapTest, AFrameAddsAViewOnlyAfterTheRobotMovedOrTurnedOrTheExperienceChanged) {
   AnchoredProfileMap map(Grid(), Model());
   const Pose2D experience{0.5, 0.0, M_PI / 2};
-  EXPECT_TRUE(map.IsNewView(7, experience, {0.5, 0.1, M_PI / 2}, 0.08, 0.25));  // the first
+  EXPECT_TRUE(map.IsNewView(7, Between(experience, {0.5, 0.1, M_PI / 2}), 0.08, 0.25));  // the first
   map.AddProfile(7, experience, {0.5, 0.1, M_PI / 2}, ObstacleAhead());
-  EXPECT_FALSE(map.IsNewView(7, experience, {0.5, 0.1, M_PI / 2}, 0.08, 0.25));        // standing
-  EXPECT_FALSE(map.IsNewView(7, experience, {0.5, 0.17, M_PI / 2 + 0.2}, 0.08, 0.25));  // 7 cm, 0.2 rad
-  EXPECT_TRUE(map.IsNewView(7, experience, {0.5, 0.19, M_PI / 2}, 0.08, 0.25));         // 9 cm
-  EXPECT_TRUE(map.IsNewView(7, experience, {0.5, 0.1, M_PI / 2 - 0.3}, 0.08, 0.25));    // 0.3 rad
-  EXPECT_TRUE(map.IsNewView(7, experience, {0.5, 0.1, -M_PI / 2}, 0.08, 0.25));         // turned round
-  EXPECT_TRUE(map.IsNewView(8, {0.5, 0.1, M_PI / 2}, {0.5, 0.1, M_PI / 2}, 0.08, 0.25));  // a new experience
+  EXPECT_FALSE(map.IsNewView(7, Between(experience, {0.5, 0.1, M_PI / 2}), 0.08, 0.25));        // standing
+  EXPECT_FALSE(map.IsNewView(7, Between(experience, {0.5, 0.17, M_PI / 2 + 0.2}), 0.08, 0.25));  // 7 cm, 0.2 rad
+  EXPECT_TRUE(map.IsNewView(7, Between(experience, {0.5, 0.19, M_PI / 2}), 0.08, 0.25));         // 9 cm
+  EXPECT_TRUE(map.IsNewView(7, Between(experience, {0.5, 0.1, M_PI / 2 - 0.3}), 0.08, 0.25));    // 0.3 rad
+  EXPECT_TRUE(map.IsNewView(7, Between(experience, {0.5, 0.1, -M_PI / 2}), 0.08, 0.25));         // turned round
+  EXPECT_TRUE(map.IsNewView(8, Between({0.5, 0.1, M_PI / 2}, {0.5, 0.1, M_PI / 2}), 0.08, 0.25));  // a new experience
   // Offsets from the experience, not map poses: a corrected experience moves the robot with it.
-  EXPECT_FALSE(map.IsNewView(7, {1.5, 0.0, M_PI / 2}, {1.5, 0.1, M_PI / 2}, 0.08, 0.25));
-  EXPECT_TRUE(map.IsNewView(7, experience, {0.5, 0.1, M_PI / 2}, 0.0, 0.0));  // spacing 0: every frame
+  EXPECT_FALSE(map.IsNewView(7, Between({1.5, 0.0, M_PI / 2}, {1.5, 0.1, M_PI / 2}), 0.08, 0.25));
+  EXPECT_TRUE(map.IsNewView(7, Between(experience, {0.5, 0.1, M_PI / 2}), 0.0, 0.0));  // spacing 0: every frame
 }
 
 TEST(AnchoredProfileMapTest, UnknownExperiencesKeepTheirPoseOnRebuild) {
