@@ -43,6 +43,26 @@ void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s)
   accum_time_ += dt_s;
 }
 
+void ExperienceMap::HoldHeading(double wall_direction_rad) {
+  if (!std::isfinite(wall_direction_rad)) Reject("wall direction is not finite");
+  if (!config_.exp_manhattan) return;
+  constexpr double kMinAgreement = 0.9;
+  const double direction = accum_facing_ + wall_direction_rad;
+  if (!manhattan_axes_) {
+    manhattan_sum_cos_ += std::cos(4.0 * direction);
+    manhattan_sum_sin_ += std::sin(4.0 * direction);
+    if (++manhattan_count_ < config_.exp_manhattan_reference_frames) return;
+    if (std::hypot(manhattan_sum_cos_, manhattan_sum_sin_) >= kMinAgreement * manhattan_count_)
+      manhattan_axes_ = std::atan2(manhattan_sum_sin_, manhattan_sum_cos_) / 4.0;
+    manhattan_sum_cos_ = manhattan_sum_sin_ = 0.0;
+    manhattan_count_ = 0;
+    return;
+  }
+  const double offset = std::remainder(direction - *manhattan_axes_, kPi / 2.0);
+  if (std::abs(offset) > config_.exp_manhattan_max_offset_rad) return;
+  accum_facing_ = ClipAngle(accum_facing_ - config_.exp_manhattan_gain * offset);
+}
+
 ExperienceMap::Observation ExperienceMap::ObservedFromCurrent(double relative_angle_rad) const {
   // The robot faces relative_angle_rad from the experience it recognises (SetCurrent), so that
   // experience faces accum_facing_ - relative_angle_rad. OpenRatSLAM adds the angle here and in
@@ -482,6 +502,11 @@ proto::ExperienceMap ExperienceMap::Save() const {
   m.set_sweep_link(sweep_link_);
   for (uint32_t li : local_region_) m.add_local_region_links(li);
   m.set_next_sequence(next_sequence_);
+  m.set_has_manhattan_axes(manhattan_axes_.has_value());
+  m.set_manhattan_axes_rad(manhattan_axes_.value_or(0.0));
+  m.set_manhattan_sum_cos(manhattan_sum_cos_);
+  m.set_manhattan_sum_sin(manhattan_sum_sin_);
+  m.set_manhattan_count(static_cast<uint32_t>(manhattan_count_));
   return m;
 }
 
@@ -509,6 +534,10 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   if (!m.has_current() && n > 0) Reject("saved map has experiences but no current one");
   if (!finite({m.accum_x_m(), m.accum_y_m(), m.accum_facing_rad(), m.accum_time_s()})) {
     Reject("saved odometry accumulator is not finite");
+  }
+  if (!finite({m.manhattan_axes_rad(), m.manhattan_sum_cos(), m.manhattan_sum_sin()}) ||
+      m.manhattan_count() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
+    Reject("saved wall axes are not finite or their count is out of range");
   }
   if (m.sweep_experience() > n) Reject("saved sweep position out of range");
   for (uint32_t li : m.local_region_links()) {
@@ -540,6 +569,10 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   sweep_link_ = m.sweep_link();
   local_region_.assign(m.local_region_links().begin(), m.local_region_links().end());
   next_sequence_ = m.next_sequence();
+  manhattan_axes_ = m.has_manhattan_axes() ? std::optional(m.manhattan_axes_rad()) : std::nullopt;
+  manhattan_sum_cos_ = m.manhattan_sum_cos();
+  manhattan_sum_sin_ = m.manhattan_sum_sin();
+  manhattan_count_ = static_cast<int>(m.manhattan_count());
 }
 
 }  // namespace rslam::experience_map

@@ -31,6 +31,7 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include "services/experience_map/experience_action.h"
@@ -92,6 +93,17 @@ class ExperienceMap {
   // Accumulates odometry since the current experience (vtrans m/s, vrot rad/s over dt s).
   // Throws std::invalid_argument on non-finite values or negative dt.
   void Integrate(double vtrans_mps, double vrot_radps, double dt_s);
+
+  // With exp_manhattan: this frame's wall direction in the robot frame, modulo 90 degrees (the
+  // odometry's Velocity.wall_direction_rad; call it after Integrate for the frame that saw it).
+  // The first exp_manhattan_reference_frames directions, taken in the map frame, fix the
+  // building's axes if they agree (resultant length of 4 x the angles at least 0.9; else the
+  // next ones are tried); later ones within exp_manhattan_max_offset_rad of an axis turn the
+  // robot's heading exp_manhattan_gain of the way onto it. Without exp_manhattan it does nothing.
+  // Throws std::invalid_argument for a non-finite direction.
+  void HoldHeading(double wall_direction_rad);
+  // The building's axes (one direction modulo pi/2) in the map frame, once fixed.
+  std::optional<double> manhattan_axes() const { return manhattan_axes_; }
 
   // Applies one action, then spends this frame's correction budget (call it once per frame,
   // with kind kNone when the pose cells emitted nothing). Throws std::invalid_argument, with the
@@ -179,6 +191,11 @@ class ExperienceMap {
   std::vector<LinkTrig> link_trig_;
   uint64_t next_sequence_ = 0;
   double last_correction_ = 0.0;
+  // HoldHeading: the axes once fixed, and while fixing them the sums of cos and sin of 4 x the
+  // wall directions so far.
+  std::optional<double> manhattan_axes_;
+  double manhattan_sum_cos_ = 0.0, manhattan_sum_sin_ = 0.0;
+  int manhattan_count_ = 0;
   bool graph_pending_ = false;    // links changed since the last least-squares correction
   int frames_since_graph_ = 0;
 };

@@ -2,6 +2,7 @@
 // Configuration of the experience map. OpenRatSLAM keys keep their names and defaults.
 
 #include <cmath>
+#include <numbers>
 
 #include "common/config/config_error.h"
 
@@ -46,6 +47,15 @@ struct ExperienceMapConfig {
   double exp_graph_closure_sigma_m = 0.1;
   double exp_graph_closure_sigma_rad = 0.01;
   double exp_graph_closure_robust_phi = 0.0;  // 0: every recognition weighs by its sigmas alone
+  // The robot's heading held to the building's walls (ExperienceMap::HoldHeading): most walls run
+  // along two perpendicular directions (the Manhattan-world assumption). The first
+  // exp_manhattan_reference_frames wall directions the odometry reports fix those axes in the
+  // map frame; after that a wall direction within exp_manhattan_max_offset_rad of an axis moves
+  // the robot's heading exp_manhattan_gain of the way onto it (one farther off is another wall).
+  bool exp_manhattan = false;
+  int exp_manhattan_reference_frames = 50;
+  double exp_manhattan_max_offset_rad = 0.25;
+  double exp_manhattan_gain = 0.2;
 
   template <class V>
   void VisitFields(V& v) {
@@ -73,6 +83,11 @@ struct ExperienceMapConfig {
     v("exp_graph_closure_sigma_rad", exp_graph_closure_sigma_rad, "uncertainty of a recognised place's facing (rad)");
     v("exp_graph_closure_robust_phi", exp_graph_closure_robust_phi,
       "> 0: recognitions far off the rest of the map (chi^2 >> phi) weigh less (dynamic covariance scaling)");
+    v("exp_manhattan", exp_manhattan, "hold the robot's heading to the walls' two perpendicular directions");
+    v("exp_manhattan_reference_frames", exp_manhattan_reference_frames, "wall directions that fix the axes at the start");
+    v("exp_manhattan_max_offset_rad", exp_manhattan_max_offset_rad,
+      "a wall direction farther than this from an axis is another wall and is ignored (rad)");
+    v("exp_manhattan_gain", exp_manhattan_gain, "share of a wall direction's offset from its axis taken out per frame");
   }
 
   void Validate() const {
@@ -93,6 +108,12 @@ struct ExperienceMapConfig {
     Require(exp_graph_closure_sigma_rad > 0, "exp_graph_closure_sigma_rad", "must be positive");
     Require(std::isfinite(exp_graph_closure_robust_phi) && exp_graph_closure_robust_phi >= 0,
             "exp_graph_closure_robust_phi", "must be >= 0");
+    Require(exp_manhattan_reference_frames >= 1, "exp_manhattan_reference_frames", "must be at least 1");
+    Require(std::isfinite(exp_manhattan_max_offset_rad) && exp_manhattan_max_offset_rad > 0 &&
+                exp_manhattan_max_offset_rad < std::numbers::pi / 4,
+            "exp_manhattan_max_offset_rad", "must be in (0, pi/4)");
+    Require(std::isfinite(exp_manhattan_gain) && exp_manhattan_gain > 0 && exp_manhattan_gain <= 1,
+            "exp_manhattan_gain", "must be in (0, 1]");
   }
 };
 

@@ -103,6 +103,7 @@ class ExperienceMapNode::Mapper {
     if (!std::isfinite(a.pc_x) || !std::isfinite(a.pc_y) || !std::isfinite(a.pc_th))
       return "pose-cell position is not finite";
     if (!std::isfinite(a.relative_angle_rad)) return "relative angle is not finite";
+    if (a.wall_seen && !std::isfinite(a.wall_direction_rad)) return "wall direction is not finite";
     return "";
   }
 
@@ -140,6 +141,13 @@ class ExperienceMapNode::Mapper {
     const uint32_t experiences_before = static_cast<uint32_t>(map_.experiences().size());
     const size_t links_before = map_.links().size();
     map_.Integrate(m.vtrans_mps, m.vrot_radps, m.dt_s);  // validated on arrival
+    if (m.wall_seen) {
+      const bool had_axes = map_.manhattan_axes().has_value();
+      map_.HoldHeading(m.wall_direction_rad);
+      if (!had_axes && map_.manhattan_axes())
+        spdlog::info("frame {}: the walls' axes are at {:.3f} rad (mod pi/2) in the map frame; holding the heading to them",
+                     m.header.frame_seq, *map_.manhattan_axes());
+    }
     try {
       map_.Apply(FromActionMessage(m));
     } catch (const std::invalid_argument& e) {

@@ -11,6 +11,7 @@
 #include "services/occupancy/obstacle_profile_pipeline.h"
 #include "services/odometry/floor_odometry.h"
 #include "services/odometry/visual_odometry.h"
+#include "services/odometry/wall_direction.h"
 
 namespace rslam::odometry {
 
@@ -21,7 +22,6 @@ class OdometryNode::Impl {
     if (config.floor.enabled) {
       boundary_ = std::make_unique<occupancy::ObstacleProfilePipeline>(config.floor.boundary);
       floor_ = std::make_unique<FloorOdometry>(config.floor.registration);
-      if (config.floor.manhattan.enabled) manhattan_ = std::make_unique<ManhattanHeading>(config.floor.manhattan);
     }
   }
 
@@ -101,6 +101,7 @@ class OdometryNode::Impl {
       dt_s = 0.0;
     }
     Velocity velocity;
+    wall_direction_.reset();
     try {
       // The first frame's dt is ignored by the odometry but must be valid.
       velocity = odometry_.Update(grey, restart ? 1.0 / config_.visual.camera_hz : dt_s);
@@ -120,6 +121,10 @@ class OdometryNode::Impl {
     out.vrot_radps = velocity.vrot;
     out.dt_s = dt_s;
     out.source = msg::VelocitySource::VELOCITY_VISUAL;
+    if (wall_direction_) {
+      out.wall_seen = true;
+      out.wall_direction_rad = *wall_direction_;
+    }
     Publish(out);
     context_.SetLastFrame(image.header.frame_seq, image.header.stamp_ns);
   }
@@ -127,7 +132,8 @@ class OdometryNode::Impl {
   // Replaces the column-profile velocity by the floor-boundary registration's, seeded with it;
   // a frame that cannot be registered keeps the profiles' turn and the floor odometry's
   // constant-velocity step, a turn on the spot (with turns_from_profiles) the profiles' motion
-  // (the registration still sees it, to keep its key frame). Throws std::invalid_argument for an
+  // (the registration still sees it, to keep its key frame). Also finds the frame's wall
+  // direction (wall_direction.h) in the same boundary. Throws std::invalid_argument for an
   // image the boundary pipeline cannot read (not bgr8, or not the configured camera's size).
   void FloorMotion(const msg::Image& image, double dt_s, Velocity& velocity) {
     if (image.encoding != camera::kBgr8)
@@ -143,23 +149,13 @@ class OdometryNode::Impl {
     prior.dx = velocity.vtrans * dt_s;
     prior.dtheta = velocity.vrot * dt_s;
     const PlanarMotion motion = floor_->Update(boundary_points_, prior);
+    wall_direction_ = WallDirection(boundary_points_, config_.floor.wall_direction);
     if (dt_s <= 0) return;
     const double turn_in_place = config_.visual.turn_in_place_vrot_radps;
     if (!(config_.floor.turns_from_profiles && turn_in_place > 0 && std::abs(velocity.vrot) >= turn_in_place)) {
       // Unregistered, the floor odometry returns the prior with its constant-velocity forward step.
       velocity.vtrans = motion.dx / dt_s;
       if (motion.measured) velocity.vrot = motion.dtheta / dt_s;
-    }
-    if (manhattan_) {
-      const bool had_axes = manhattan_->axes().has_value();
-      heading_ += velocity.vrot * dt_s;
-      const double correction = manhattan_->Update(boundary_points_, heading_);
-      heading_ += correction;
-      velocity.vrot += correction / dt_s;
-      if (!had_axes && manhattan_->axes())
-        spdlog::info("frame {}: the walls' axes are at {:.3f} rad (mod pi/2) in the odometry frame; "
-                     "holding the heading to them",
-                     image.header.frame_seq, *manhattan_->axes());
     }
   }
 
@@ -170,10 +166,7 @@ class OdometryNode::Impl {
   VisualOdometry odometry_;
   std::unique_ptr<occupancy::ObstacleProfilePipeline> boundary_;  // floor odometry only
   std::unique_ptr<FloorOdometry> floor_;
-  // Heading held to the walls (floor odometry only): the heading integrated from the published
-  // turns, kept across restarts (downstream integrates them on).
-  std::unique_ptr<ManhattanHeading> manhattan_;
-  double heading_ = 0.0;
+  std::optional<double> wall_direction_;  // this frame's (floor odometry only)
   std::vector<Eigen::Vector2d> boundary_points_;
   std::optional<int64_t> previous_stamp_ns_;
   cv::Size previous_size_;

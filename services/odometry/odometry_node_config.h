@@ -8,7 +8,7 @@
 #include "common/config/config_error.h"
 #include "services/occupancy/obstacle_profile_pipeline.h"
 #include "services/odometry/floor_odometry.h"
-#include "services/odometry/manhattan_heading.h"
+#include "services/odometry/wall_direction.h"
 #include "services/odometry/visual_odometry_config.h"
 
 namespace rslam::odometry {
@@ -24,7 +24,7 @@ struct FloorOdometryNodeConfig {
   bool turns_from_profiles = true;
   occupancy::ObstacleProfileConfig boundary;
   FloorOdometryConfig registration;
-  ManhattanHeadingConfig manhattan;
+  WallDirectionConfig wall_direction;
 
   template <class V>
   void VisitFields(V& v) {
@@ -33,13 +33,14 @@ struct FloorOdometryNodeConfig {
       "frames the column profiles call a turn on the spot keep the profiles' motion");
     boundary.VisitFields(v);
     registration.VisitFields(v);
-    v("manhattan", manhattan, "hold the heading to the walls' two perpendicular directions (manhattan_heading.h)");
+    v("wall_direction", wall_direction,
+      "each frame's wall direction modulo 90 degrees, published for the experience map (wall_direction.h)");
   }
   void Validate() const {
     if (!enabled) return;
     boundary.Validate();
     registration.Validate();
-    ValidateNested(manhattan, "manhattan");
+    ValidateNested(wall_direction, "wall_direction");
   }
 };
 

@@ -178,6 +178,10 @@ class PoseCellsNode::Processor {
     }
     msg::PoseCellAction out = ToActionMessage(action, next_action_seq_++, vtrans, vrot, dt);
     out.header = header;
+    if (frame.velocity && frame.velocity->wall_seen) {  // for the experience map (exp_manhattan)
+      out.wall_seen = true;
+      out.wall_direction_rad = frame.velocity->wall_direction_rad;
+    }
     if (frame.velocity) mean_vtrans_mps_ += 0.1 * (vtrans - mean_vtrans_mps_);
     has_last_frame_ = true;
     last_frame_seq_ = header.frame_seq;

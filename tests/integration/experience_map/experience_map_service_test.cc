@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -84,6 +85,19 @@ class ExperienceMapServiceTest : public ::testing::Test {
       if (auto m = map_sub_->TakeOne(100ms); m && pred(*m)) return m;
     }
     return std::nullopt;
+  }
+
+  static constexpr uint64_t kWallFrames = 60;
+  std::vector<msg::ExperiencePose> DriveStraightPastWalls() {
+    for (uint64_t seq = 0; seq < kWallFrames; ++seq) {
+      msg::PoseCellAction a = seq == 0 ? Action(0, msg::ActionKind::ACTION_CREATE, 0, kNone)
+                                       : Action(seq, msg::ActionKind::ACTION_NONE, kNone, kNone);
+      a.vrot_radps = 0.2;  // 20 mrad a frame of 0.1 s
+      a.wall_seen = true;
+      a.wall_direction_rad = seq == 30 ? std::nan("") : -0.2;  // in the robot frame
+      action_pub_->Publish(a);
+    }
+    return AwaitPoses(kWallFrames - 1);  // the malformed one publishes nothing
   }
 
   std::optional<msg::ServiceStatus> AwaitRejected(uint64_t min_rejected, std::chrono::milliseconds timeout = 5s) {
@@ -171,6 +185,27 @@ TEST_F(ExperienceMapServiceTest, ActionWithUnknownIdIsRejectedAndTheServiceKeeps
   const auto status = AwaitRejected(2);
   ASSERT_TRUE(status) << service->Output();
   EXPECT_TRUE(service->Running());
+}
+
+// The robot drives straight past walls at 0.2 rad to it while its odometry turns 20 mrad a frame
+// it does not turn; one action's wall direction is not finite (refused: nothing of it applied).
+TEST_F(ExperienceMapServiceTest, WallDirectionsInTheActionsHoldTheHeadingWithExpManhattan) {
+  auto service = Start({"--set", "experience_map.exp_initial_em_deg=0", "--set", "experience_map.exp_manhattan=true",
+                        "--set", "experience_map.exp_manhattan_reference_frames=3"});
+  const auto poses = DriveStraightPastWalls();
+  ASSERT_EQ(poses.size(), kWallFrames - 1) << service->Output();
+  // Axes fixed after 3 frames (40 mrad of drift on average), then held where a frame's drift is
+  // a fifth of the offset: 40 + 100 - 20 mrad.
+  EXPECT_NEAR(poses.back().theta_rad, 0.12, 1e-6);
+  ASSERT_TRUE(AwaitRejected(1)) << service->Output();
+  EXPECT_TRUE(service->Running());
+}
+
+TEST_F(ExperienceMapServiceTest, WallDirectionsChangeNothingWithoutExpManhattan) {
+  auto service = Start({"--set", "experience_map.exp_initial_em_deg=0"});
+  const auto poses = DriveStraightPastWalls();
+  ASSERT_EQ(poses.size(), kWallFrames - 1) << service->Output();
+  EXPECT_NEAR(poses.back().theta_rad, 0.02 * (kWallFrames - 1), 1e-9);
 }
 
 TEST_F(ExperienceMapServiceTest, MissingActionIsSkippedAfterTheGapWindow) {

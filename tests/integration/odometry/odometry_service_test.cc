@@ -11,7 +11,12 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
+#include "services/occupancy/obstacle_profile_pipeline.h"
+#include "services/occupancy/occupancy_node_config.h"
+#include "services/odometry/wall_direction.h"
 #include "tests/integration/camera/image_test_util.h"
+#include "tools/sim/camera_renderer.h"
+#include "tools/sim/world_map.h"
 #include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
@@ -198,6 +203,54 @@ TEST_F(OdometryServiceTest, WheelOdometryIsRepublishedWithItsHeader) {
   bad.vrot_radps = std::nan("");
   wheel_->Publish(bad);
   EXPECT_FALSE(velocities_->TakeOne(500ms)) << "a NaN wheel velocity is not passed on";
+}
+
+// Frames the simulator renders in the shipped world, through the demo's config (floor odometry on):
+// each velocity says whether its frame showed a straight wall and, if so, the walls' direction
+// modulo 90 degrees in the robot frame (the world's walls run along x and y).
+TEST_F(OdometryServiceTest, FloorOdometryReportsTheWallsDirection) {
+  const sim::WorldMap world = sim::WorldMap::LoadFromYaml(RSLAM_SOURCE_DIR "/deploy/worlds/uwb-room.yaml");
+  sim::CameraRenderer renderer(world, sim::SceneConfig{}, sim::CameraConfig{});
+  occupancy::ObstacleProfilePipeline boundary(occupancy::SimulatorMatchedPipelineConfig());
+  // Poses whose frames give (in this process) a direction within 0.02 rad of the truth, and poses
+  // with nothing within 2 m, from a walk over the map.
+  std::vector<std::pair<sim::Pose2D, bool>> poses;
+  int with_wall = 0, without = 0;
+  uint64_t render_seq = 0;
+  for (double x = -6.0; x <= 6.0 && (with_wall < 3 || without < 2); x += 0.5)
+    for (double y = -6.0; y <= 6.0; y += 0.5)
+      for (double theta = 0.1; theta < 2 * M_PI; theta += 0.7) {
+        if (!world.IsDiscFree({x, y}, 0.2)) continue;
+        const occupancy::RadialObstacleProfile profile = boundary.ProfileFromImage(renderer.Render({x, y, theta}, render_seq++));
+        std::vector<Eigen::Vector2d> points;
+        for (size_t i = 0; i < profile.bins.size(); ++i)
+          if (profile.bins[i].status == occupancy::BinStatus::kObstacle)
+            points.emplace_back(profile.bins[i].range_m * std::cos(profile.BinCentre(i)),
+                                profile.bins[i].range_m * std::sin(profile.BinCentre(i)));
+        const auto wall = odometry::WallDirection(points, odometry::WallDirectionConfig{});
+        if (wall && with_wall < 3 && std::abs(std::remainder(theta + *wall, M_PI / 2)) < 0.02) {
+          poses.push_back({{x, y, theta}, true});
+          ++with_wall;
+        } else if (points.empty() && without < 2) {
+          poses.push_back({{x, y, theta}, false});
+          ++without;
+        }
+      }
+  ASSERT_EQ(with_wall, 3);
+  ASSERT_EQ(without, 2);
+
+  auto process = std::make_unique<ChildProcess>(
+      kBinary, std::vector<std::string>{"--domain", std::to_string(domain_.id()), "--config",
+                                        RSLAM_SOURCE_DIR "/deploy/config/demo.yaml"});
+  ASSERT_TRUE(images_->WaitForSubscribers(1, 10s)) << process->Output();
+  ASSERT_TRUE(velocities_->WaitForPublishers(1, 10s)) << process->Output();
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const auto& [pose, wall] = poses[i];
+    const auto v = Send(renderer.Render(pose, i), i, static_cast<int64_t>(i + 1) * 100'000'000);
+    ASSERT_TRUE(v) << process->Output();
+    ASSERT_EQ(v->wall_seen, wall) << "frame " << i;
+    if (wall) EXPECT_LT(std::abs(std::remainder(pose.theta + v->wall_direction_rad, M_PI / 2)), 0.02) << "frame " << i;
+  }
 }
 
 TEST_F(OdometryServiceTest, BadConfigExitsTwoNamingTheKey) {

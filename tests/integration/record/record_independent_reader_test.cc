@@ -67,7 +67,8 @@ json ToJson(const msg::Image& m) {
 }
 json ToJson(const msg::Velocity& m) {
   return {{"header", ToJson(m.header)}, {"vtrans_mps", m.vtrans_mps}, {"vrot_radps", m.vrot_radps},
-          {"dt_s", m.dt_s},             {"source", static_cast<int>(m.source)}};
+          {"dt_s", m.dt_s},             {"source", static_cast<int>(m.source)},
+          {"wall_seen", m.wall_seen},   {"wall_direction_rad", m.wall_direction_rad}};
 }
 json ToJson(const msg::PoseCellAction& m) {
   return {{"header", ToJson(m.header)},
@@ -82,7 +83,9 @@ json ToJson(const msg::PoseCellAction& m) {
           {"pc_th", static_cast<double>(m.pc_th)},
           {"vtrans_mps", m.vtrans_mps},
           {"vrot_radps", m.vrot_radps},
-          {"dt_s", m.dt_s}};
+          {"dt_s", m.dt_s},
+          {"wall_seen", m.wall_seen},
+          {"wall_direction_rad", m.wall_direction_rad}};
 }
 json ToJson(const msg::ExperienceMap& m) {
   json experiences = json::array();

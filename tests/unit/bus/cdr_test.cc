@@ -15,6 +15,8 @@ TEST(CdrTest, VelocityEncodesAsXcdr1LittleEndianWithAlignment) {
   v.vrot_radps = 0;
   v.dt_s = 0;
   v.source = msg::VelocitySource::VELOCITY_WHEEL;
+  v.wall_seen = true;
+  v.wall_direction_rad = -0.25;
   const std::vector<uint8_t> cdr = ToCdr(v);
   const std::vector<uint8_t> expected = {
       0x00, 0x01, 0x00, 0x00,                          // encapsulation CDR_LE
@@ -26,6 +28,8 @@ TEST(CdrTest, VelocityEncodesAsXcdr1LittleEndianWithAlignment) {
       0, 0, 0, 0, 0, 0, 0, 0,                          // 0.0
       0, 0, 0, 0, 0, 0, 0, 0,                          // 0.0
       0x01, 0, 0, 0,                                   // enum VELOCITY_WHEEL
+      0x01, 0, 0, 0,                                   // true, padded to 8
+      0, 0, 0, 0, 0, 0, 0xD0, 0xBF,                    // -0.25
   };
   EXPECT_EQ(cdr, expected);
   EXPECT_EQ(FromCdr<msg::Velocity>(cdr), v);
@@ -86,7 +90,7 @@ TEST(CdrTest, TruncatedOrCorruptMessagesAreRefused) {
   // An unknown enum value is refused.
   msg::Velocity v;
   std::vector<uint8_t> vel = ToCdr(v);
-  vel[vel.size() - 4] = 9;
+  vel[vel.size() - 16] = 9;  // the enum, before the bool and its padding and the double
   EXPECT_THROW(FromCdr<msg::Velocity>(vel), CdrError);
   // XCDR2 or parameter-list encodings are refused.
   std::vector<uint8_t> xcdr2 = cdr;

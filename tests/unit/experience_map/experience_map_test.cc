@@ -7,6 +7,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <string>
+#include <utility>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
@@ -524,6 +527,87 @@ TEST(ExperienceMap, LeastSquaresKeysOutOfRangeAreRefused) {
   ExperienceMapConfig iterations = LeastSquares(1);
   iterations.exp_graph_iterations = 0;
   EXPECT_THROW(iterations.Validate(), ConfigError);
+}
+
+ExperienceMapConfig HeldToWalls() {
+  ExperienceMapConfig c;
+  c.exp_initial_em_deg = 0;
+  c.exp_manhattan = true;
+  c.exp_manhattan_reference_frames = 5;
+  return c;
+}
+
+TEST(ExperienceMap, HeadingHeldToTheWallsLosesTheOdometrysDrift) {
+  // The robot drives straight (true heading 0 in the map frame) past walls at 0.2 rad to it; the
+  // odometry turns it 2 mrad a frame that it does not turn.
+  for (bool held : {false, true}) {
+    ExperienceMapConfig config = HeldToWalls();
+    config.exp_manhattan = held;
+    ExperienceMap map(config);
+    map.Apply(Create(0, kNoExperience));
+    for (int frame = 0; frame < 500; ++frame) {
+      map.Integrate(0.25, 0.02, 0.1);
+      map.HoldHeading(-0.2);  // the walls in the robot frame: at 0.2 rad in the truth's
+      map.Apply(frame % 10 == 9 ? Create(frame / 10 + 1, frame / 10) : ExperienceAction{});
+    }
+    if (!held) {
+      EXPECT_NEAR(map.RobotPose().th_rad, 1.0, 1e-9);
+      EXPECT_FALSE(map.manhattan_axes().has_value());
+      continue;
+    }
+    // The axes were fixed after 5 frames (6 mrad of drift on average); the heading then holds
+    // where a frame's drift (2 mrad) is the gain's share (0.2) of the offset: 6 + 10 - 2 mrad.
+    ASSERT_TRUE(map.manhattan_axes().has_value());
+    EXPECT_NEAR(*map.manhattan_axes(), -0.2 + 0.006, 1e-9);
+    EXPECT_NEAR(map.RobotPose().th_rad, 0.014, 1e-6);
+    // So are the experiences it laid and the links between them.
+    EXPECT_NEAR(map.experiences().back().th_rad, 0.014, 1e-6);
+    EXPECT_NEAR(map.links().back().facing_rad, 0.0, 1e-3);
+  }
+}
+
+TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
+  ExperienceMap map(HeldToWalls());
+  for (int i = 0; i < 5; ++i) map.HoldHeading(0.0);  // fixes the axes at 0
+  ASSERT_TRUE(map.manhattan_axes().has_value());
+  EXPECT_NEAR(*map.manhattan_axes(), 0.0, 1e-12);
+  map.HoldHeading(0.1);  // a wall 0.1 rad off: the heading turns a fifth of it back
+  EXPECT_NEAR(map.RobotPose().th_rad, -0.02, 1e-12);
+  map.HoldHeading(0.6);  // 0.6 rad off: some other wall
+  EXPECT_NEAR(map.RobotPose().th_rad, -0.02, 1e-12);
+  EXPECT_THROW(map.HoldHeading(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
+  EXPECT_NEAR(map.RobotPose().th_rad, -0.02, 1e-12);
+
+  // Reference directions that disagree (a corner of odd angle, a table) fix nothing.
+  ExperienceMap scattered(HeldToWalls());
+  for (double d : {0.0, 0.3, -0.3, 0.15, 0.4}) scattered.HoldHeading(d);
+  EXPECT_FALSE(scattered.manhattan_axes().has_value());
+
+  // The axes and the half-gathered reference survive a save and a load.
+  ExperienceMap half(HeldToWalls());
+  for (int i = 0; i < 3; ++i) half.HoldHeading(0.1);
+  ExperienceMap loaded(HeldToWalls());
+  loaded.Load(half.Save());
+  for (int i = 0; i < 2; ++i) loaded.HoldHeading(0.1);
+  ASSERT_TRUE(loaded.manhattan_axes().has_value());
+  EXPECT_NEAR(*loaded.manhattan_axes(), 0.1, 1e-12);
+  ExperienceMap reloaded(HeldToWalls());
+  reloaded.Load(loaded.Save());
+  EXPECT_EQ(reloaded.manhattan_axes(), loaded.manhattan_axes());
+
+  for (auto [key, bad] : {std::pair<std::string, std::function<void(ExperienceMapConfig&)>>{
+                              "exp_manhattan_gain", [](ExperienceMapConfig& c) { c.exp_manhattan_gain = 0; }},
+                          {"exp_manhattan_max_offset_rad", [](ExperienceMapConfig& c) { c.exp_manhattan_max_offset_rad = 0.8; }},
+                          {"exp_manhattan_reference_frames", [](ExperienceMapConfig& c) { c.exp_manhattan_reference_frames = 0; }}}) {
+    ExperienceMapConfig c = HeldToWalls();
+    bad(c);
+    try {
+      c.Validate();
+      ADD_FAILURE() << key << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(e.key(), key);
+    }
+  }
 }
 
 proto::ExperienceMap SmallGraph() {

@@ -1,8 +1,7 @@
-// Heading held to the walls (services/odometry/manhattan_heading.h): wall directions of exact
-// geometry, the correction of a drifting heading, and wall directions of frames the simulator
-// renders in the shipped uwb-room world against the true heading.
+// The walls' direction modulo 90 degrees (services/odometry/wall_direction.h): of exact geometry,
+// and of frames the simulator renders in the shipped uwb-room world against the true heading.
 
-#include "services/odometry/manhattan_heading.h"
+#include "services/odometry/wall_direction.h"
 
 #include <gtest/gtest.h>
 
@@ -34,83 +33,35 @@ std::vector<Eigen::Vector2d> WallAhead(double distance, double angle) {
   return out;
 }
 
-ManhattanHeadingConfig Enabled() {
-  ManhattanHeadingConfig c;
-  c.enabled = true;
-  c.reference_frames = 5;
-  return c;
-}
-
-TEST(ManhattanHeadingTest, AWallsDirectionIsTakenModuloNinetyDegrees) {
-  const ManhattanHeading m(Enabled());
+TEST(WallDirectionTest, AWallsDirectionIsTakenModuloNinetyDegrees) {
+  const WallDirectionConfig config;
   for (double angle : {0.0, 0.3, -0.5, 0.9, 1.2}) {
-    const auto wall = m.WallDirection(WallAhead(1.0, angle));
+    const auto wall = WallDirection(WallAhead(1.0, angle), config);
     ASSERT_TRUE(wall.has_value()) << angle;
     // The wall runs along `along` = angle + 90 degrees: modulo 90 degrees, `angle`.
     EXPECT_NEAR(std::remainder(*wall - angle, M_PI / 2), 0.0, 1e-6) << angle;
     EXPECT_LE(std::abs(*wall), M_PI / 4 + 1e-9);
   }
   // Too far (beyond max_range_m), too little of it, or no straight wall: no direction.
-  EXPECT_FALSE(m.WallDirection(WallAhead(3.0, 0.0)).has_value());
+  EXPECT_FALSE(WallDirection(WallAhead(3.0, 0.0), config).has_value());
   const std::vector<Eigen::Vector2d> wall = WallAhead(1.0, 0.0);
-  EXPECT_FALSE(m.WallDirection(std::vector<Eigen::Vector2d>(wall.begin(), wall.begin() + 3)).has_value());
+  EXPECT_FALSE(WallDirection(std::vector<Eigen::Vector2d>(wall.begin(), wall.begin() + 3), config).has_value());
   std::vector<Eigen::Vector2d> table;  // a round table of radius 0.4 m, 1 m ahead
   for (int i = -60; i <= 60; ++i) {
     const double a = M_PI + i * M_PI / 180.0;
     table.emplace_back(1.0 + 0.4 * std::cos(a), 0.4 * std::sin(a));
   }
-  EXPECT_FALSE(m.WallDirection(table).has_value());
+  EXPECT_FALSE(WallDirection(table, config).has_value());
 }
 
-TEST(ManhattanHeadingTest, TakesTheDriftOutOfAHeadingThatSeesTheBuildingsWalls) {
-  // The robot drives with its true heading fixed; the integrated heading drifts 2 mrad a frame.
-  // The walls it sees run along the building's axes, so in the robot frame at -true heading.
-  for (bool held : {false, true}) {
-    ManhattanHeading m(Enabled());
-    const double truth = 0.2;
-    double heading = truth;
-    for (int frame = 0; frame < 500; ++frame) {
-      heading += 0.002;
-      if (held) heading += m.Update(WallAhead(1.2, -truth), heading);
-    }
-    if (!held) {
-      EXPECT_NEAR(heading - truth, 1.0, 1e-9);
-      continue;
-    }
-    ASSERT_TRUE(m.axes().has_value());
-    // The axes were fixed after 5 frames (10 mrad of drift); the heading stays within a few
-    // frames' drift of them after that.
-    EXPECT_NEAR(heading - truth, 0.01, 0.015);
-  }
-}
-
-TEST(ManhattanHeadingTest, WallsOffTheAxesAndBadInputChangeNothing) {
-  ManhattanHeading m(Enabled());
-  for (int i = 0; i < 5; ++i) EXPECT_EQ(m.Update(WallAhead(1.0, 0.0), 0.0), 0.0);  // fixes the axes at 0
-  ASSERT_TRUE(m.axes().has_value());
-  EXPECT_NEAR(*m.axes(), 0.0, 1e-9);
-  EXPECT_NEAR(m.Update(WallAhead(1.0, 0.1), 0.0), -0.2 * 0.1, 1e-9);  // a wall 0.1 rad off: pulled back
-  EXPECT_EQ(m.Update(WallAhead(1.0, 0.6), 0.0), 0.0);                // 0.6 rad off: another wall
-  EXPECT_EQ(m.Update({}, 0.3), 0.0);                                  // nothing seen
-  EXPECT_THROW(m.Update(WallAhead(1.0, 0.0), NAN), std::invalid_argument);
-  ManhattanHeadingConfig bad = Enabled();
-  bad.gain = 0.0;
-  try {
-    ManhattanHeading rejected(bad);
-    FAIL() << "gain 0 accepted";
-  } catch (const ConfigError& e) {
-    EXPECT_EQ(e.key(), "gain");
-  }
-}
-
-TEST(ManhattanHeadingTest, RenderedFramesOfTheShippedWorldShowItsAxes) {
+TEST(WallDirectionTest, RenderedFramesOfTheShippedWorldShowItsAxes) {
   // The demo's camera at poses across the uwb-room map (its walls run along x and y; most poses
   // see no wall within 1.5 m): the frames that give a wall direction give the true heading's,
   // modulo 90 degrees, but for a few (a corner, a table's edge: 155 frames, 134 right).
   const sim::WorldMap world = sim::WorldMap::LoadFromYaml(RSLAM_SOURCE_DIR "/deploy/worlds/uwb-room.yaml");
   sim::CameraRenderer renderer(world, sim::SceneConfig{}, sim::CameraConfig{});
   occupancy::ObstacleProfilePipeline boundary(occupancy::SimulatorMatchedPipelineConfig());
-  const ManhattanHeading m(Enabled());
+  const WallDirectionConfig config;
   int frames = 0, with_direction = 0, right = 0;
   uint64_t seq = 0;
   for (double x = -6.0; x <= 6.0; x += 0.5)
@@ -124,7 +75,7 @@ TEST(ManhattanHeadingTest, RenderedFramesOfTheShippedWorldShowItsAxes) {
           if (profile.bins[i].status == occupancy::BinStatus::kObstacle)
             points.emplace_back(profile.bins[i].range_m * std::cos(profile.BinCentre(i)),
                                 profile.bins[i].range_m * std::sin(profile.BinCentre(i)));
-        const auto wall = m.WallDirection(points);
+        const auto wall = WallDirection(points, config);
         if (!wall) continue;
         ++with_direction;
         right += std::abs(std::remainder(theta + *wall, M_PI / 2)) < 0.05;

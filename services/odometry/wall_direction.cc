@@ -1,0 +1,34 @@
+#include "services/odometry/wall_direction.h"
+
+#include <cmath>
+
+namespace rslam::odometry {
+
+namespace {
+constexpr double kNeighbourMaxDistanceM = 0.12;  // farther apart: not one boundary line (as floor_odometry)
+}  // namespace
+
+std::optional<double> WallDirection(std::span<const Eigen::Vector2d> boundary, const WallDirectionConfig& config) {
+  const size_t k = static_cast<size_t>(config.baseline_points);
+  double sum_cos = 0.0, sum_sin = 0.0, length = 0.0;
+  for (size_t i = 0; i + k < boundary.size(); ++i) {
+    if (boundary[i].norm() > config.max_range_m || boundary[i + k].norm() > config.max_range_m) continue;
+    bool one_line = true;
+    for (size_t j = i; j < i + k && one_line; ++j)
+      one_line = (boundary[j + 1] - boundary[j]).norm() <= kNeighbourMaxDistanceM;
+    if (!one_line) continue;
+    const Eigen::Vector2d d = boundary[i + k] - boundary[i];
+    const double l = d.norm();
+    if (l <= 0.0) continue;
+    const double a = 4.0 * std::atan2(d.y(), d.x());
+    sum_cos += l * std::cos(a);
+    sum_sin += l * std::sin(a);
+    length += l;
+  }
+  // Overlapping pairs k bins apart count each stretch of wall k times.
+  if (length / static_cast<double>(k) < config.min_wall_m || std::hypot(sum_cos, sum_sin) < config.min_agreement * length)
+    return std::nullopt;
+  return std::atan2(sum_sin, sum_cos) / 4.0;
+}
+
+}  // namespace rslam::odometry
