@@ -49,7 +49,7 @@ OccupancyGrid::OccupancyGrid(GridConfig grid, SensorModelConfig sensor)
     blind_table_[v] = (v == kUnknownValue ? LogOddsToValue(blind) : static_cast<uint16_t>(v)) + kUpdateMarker;
   }
   values_.assign(static_cast<size_t>(grid_.width) * grid_.height, kUnknownValue);
-  footprint_.assign(values_.size(), 0);
+  if (sensor_.footprint_radius_m > 0) footprint_.assign(values_.size(), 0);  // off: no layer
 }
 
 double OccupancyGrid::ValueToLogOdds(uint16_t value) const {
@@ -174,7 +174,7 @@ std::vector<int8_t> OccupancyGrid::ToRosCells() const {
   const auto footprint_percent = static_cast<int8_t>(std::lround(100.0 * sensor_.min_probability));
   std::vector<int8_t> out(values_.size());
   for (size_t i = 0; i < values_.size(); ++i)
-    out[i] = footprint_[i] ? footprint_percent : probability_percent[values_[i]];
+    out[i] = !footprint_.empty() && footprint_[i] ? footprint_percent : probability_percent[values_[i]];
   return out;
 }
 

@@ -105,7 +105,9 @@ class OccupancyGrid {
   double Probability(CellIndex c) const;  // 0.5 for unknown cells; min_probability under a footprint
   // The stored log-odds value, footprints not applied.
   uint16_t Value(CellIndex c) const { return values_[static_cast<size_t>(c.y) * grid_.width + c.x]; }
-  bool UnderFootprint(CellIndex c) const { return footprint_[static_cast<size_t>(c.y) * grid_.width + c.x] != 0; }
+  bool UnderFootprint(CellIndex c) const {
+    return !footprint_.empty() && footprint_[static_cast<size_t>(c.y) * grid_.width + c.x] != 0;
+  }
 
   // Quantisation between log-odds and stored values (kUnknownValue maps to log-odds 0).
   double ValueToLogOdds(uint16_t value) const;
@@ -125,7 +127,7 @@ class OccupancyGrid {
   std::vector<uint16_t> hit_table_, miss_table_, blind_table_;
   void MarkFootprint(double gx, double gy);
   std::vector<uint16_t> values_;
-  std::vector<uint8_t> footprint_;  // 1: a cell within footprint_radius_m of a profile's pose
+  std::vector<uint8_t> footprint_;  // 1: a cell within footprint_radius_m of a profile's pose (empty when off)
   std::vector<size_t> updated_;  // cells carrying the update marker during one insertion
   int64_t updates_in_profile_ = 0;
 };

@@ -249,7 +249,9 @@ TEST_F(OdometryServiceTest, FloorOdometryReportsTheWallsDirection) {
     const auto v = Send(renderer.Render(pose, i), i, static_cast<int64_t>(i + 1) * 100'000'000);
     ASSERT_TRUE(v) << process->Output();
     ASSERT_EQ(v->wall_seen, wall) << "frame " << i;
-    if (wall) EXPECT_LT(std::abs(std::remainder(pose.theta + v->wall_direction_rad, M_PI / 2)), 0.02) << "frame " << i;
+    if (wall) {
+      EXPECT_LT(std::abs(std::remainder(pose.theta + v->wall_direction_rad, M_PI / 2)), 0.02) << "frame " << i;
+    }
   }
 }
 
