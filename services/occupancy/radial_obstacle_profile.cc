@@ -143,4 +143,13 @@ RadialObstacleProfile PirouetteProfileBuilder::Build() const {
   return profile;
 }
 
+void RadialObstacleProfile::ObstaclePoints(std::vector<Eigen::Vector2d>& out) const {
+  out.clear();
+  for (size_t i = 0; i < bins.size(); ++i) {
+    if (bins[i].status != BinStatus::kObstacle) continue;
+    const double bearing = BinCentre(i), range = bins[i].range_m;
+    out.emplace_back(range * std::cos(bearing), range * std::sin(bearing));
+  }
+}
+
 }  // namespace rslam::occupancy

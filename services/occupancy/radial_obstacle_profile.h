@@ -13,6 +13,8 @@
 // A view that saw free floor only up to a shorter range than an obstacle (its ray left the image
 // first) does not contradict the obstacle, so only free views reaching past it vote against it.
 
+#include <Eigen/Core>
+
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -42,6 +44,9 @@ struct RadialObstacleProfile {
   double bin_width_rad = 0.0;
   std::vector<RopBin> bins;
   double BinCentre(size_t i) const { return first_bearing_rad + (i + 0.5) * bin_width_rad; }
+  // The obstacle bins' points (the range along the bin's centre bearing) in the robot frame, in
+  // bearing order: the floor boundary. `out` is cleared first.
+  void ObstaclePoints(std::vector<Eigen::Vector2d>& out) const;
 };
 
 struct RopConfig {

@@ -139,12 +139,7 @@ class OdometryNode::Impl {
     if (image.encoding != camera::kBgr8)
       throw std::invalid_argument("floor_odometry needs bgr8 images, got " + image.encoding);
     const occupancy::RadialObstacleProfile profile = boundary_->ProfileFromImage(camera::ImageView(image));
-    boundary_points_.clear();
-    for (size_t i = 0; i < profile.bins.size(); ++i) {
-      if (profile.bins[i].status != occupancy::BinStatus::kObstacle) continue;
-      const double bearing = profile.BinCentre(i), range = profile.bins[i].range_m;
-      boundary_points_.emplace_back(range * std::cos(bearing), range * std::sin(bearing));
-    }
+    profile.ObstaclePoints(boundary_points_);
     PlanarMotion prior;
     prior.dx = velocity.vtrans * dt_s;
     prior.dtheta = velocity.vrot * dt_s;

@@ -223,10 +223,7 @@ TEST_F(OdometryServiceTest, FloorOdometryReportsTheWallsDirection) {
         if (!world.IsDiscFree({x, y}, 0.2)) continue;
         const occupancy::RadialObstacleProfile profile = boundary.ProfileFromImage(renderer.Render({x, y, theta}, render_seq++));
         std::vector<Eigen::Vector2d> points;
-        for (size_t i = 0; i < profile.bins.size(); ++i)
-          if (profile.bins[i].status == occupancy::BinStatus::kObstacle)
-            points.emplace_back(profile.bins[i].range_m * std::cos(profile.BinCentre(i)),
-                                profile.bins[i].range_m * std::sin(profile.BinCentre(i)));
+        profile.ObstaclePoints(points);
         const auto wall = odometry::WallDirection(points, odometry::WallDirectionConfig{});
         if (wall && with_wall < 3 && std::abs(std::remainder(theta + *wall, M_PI / 2)) < 0.02) {
           poses.push_back({{x, y, theta}, true});

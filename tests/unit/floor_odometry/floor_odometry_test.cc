@@ -193,10 +193,7 @@ class RenderedFloorOdometryTest : public ::testing::Test {
     const cv::Mat image = renderer_.Render(pose, frame_++);
     const occupancy::RadialObstacleProfile profile = boundary_.ProfileFromImage(image);
     std::vector<Eigen::Vector2d> points;
-    for (size_t i = 0; i < profile.bins.size(); ++i)
-      if (profile.bins[i].status == occupancy::BinStatus::kObstacle)
-        points.emplace_back(profile.bins[i].range_m * std::cos(profile.BinCentre(i)),
-                            profile.bins[i].range_m * std::sin(profile.BinCentre(i)));
+    profile.ObstaclePoints(points);
     return odometry_.Update(points, prior);
   }
 

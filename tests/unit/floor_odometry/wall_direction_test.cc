@@ -71,10 +71,7 @@ TEST(WallDirectionTest, RenderedFramesOfTheShippedWorldShowItsAxes) {
         ++frames;
         const occupancy::RadialObstacleProfile profile = boundary.ProfileFromImage(renderer.Render({x, y, theta}, seq++));
         std::vector<Eigen::Vector2d> points;
-        for (size_t i = 0; i < profile.bins.size(); ++i)
-          if (profile.bins[i].status == occupancy::BinStatus::kObstacle)
-            points.emplace_back(profile.bins[i].range_m * std::cos(profile.BinCentre(i)),
-                                profile.bins[i].range_m * std::sin(profile.BinCentre(i)));
+        profile.ObstaclePoints(points);
         const auto wall = WallDirection(points, config);
         if (!wall) continue;
         ++with_direction;
