@@ -152,6 +152,10 @@ PlayReport PlayFiles(bus::Participant& participant, const std::vector<std::strin
         why = "no omgidl schema";
       } else if ((type = bus::FindMessageType(schema->second.name)) == nullptr) {
         why = "unknown type " + schema->second.name;
+      } else if (schema->second.data != type->idl) {
+        // Recorded by another version of rslam whose message differs: today's readers would
+        // refuse every sample as malformed.
+        why = "recorded with another definition of " + schema->second.name + " than this build's";
       } else if (dds_topic == nullptr || robot == nullptr || qos_name == nullptr) {
         why = "metadata lacks dds_topic, robot or qos";
       } else {
