@@ -52,6 +52,8 @@ struct ExperienceMapConfig {
   // exp_manhattan_reference_frames wall directions the odometry reports fix those axes in the
   // map frame; after that a wall direction within exp_manhattan_max_offset_rad of an axis moves
   // the robot's heading exp_manhattan_gain of the way onto it (one farther off is another wall).
+  // Only the floor odometry (odometry.floor_odometry) reports wall directions; without it the key
+  // changes nothing.
   bool exp_manhattan = false;
   int exp_manhattan_reference_frames = 50;
   double exp_manhattan_max_offset_rad = 0.25;
