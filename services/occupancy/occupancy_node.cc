@@ -209,12 +209,13 @@ class OccupancyNode::Mapper {
     const Pose2D robot{pose.x_m, pose.y_m, pose.theta_rad};
     const Pose2D experience{pose.experience_x_m, pose.experience_y_m, pose.experience_theta_rad};
     AnchoredProfile anchored{pose.current_experience_id, Between(experience, robot), experience, {}};
+    bool kept = false;  // the profile moved into the map; else `anchored` holds it, to publish
     try {
       anchored.profile = pipeline_.ProfileFromImage(view);
       if (map_.IsNewView(pose.current_experience_id, anchored.offset, config_.profile_min_spacing_m,
                          config_.profile_min_turn_rad)) {
-        map_.AddProfile(pose.current_experience_id, experience, robot, anchored.profile);
-        dirty_ = true;
+        map_.AddProfile(pose.current_experience_id, experience, robot, std::move(anchored.profile));
+        kept = dirty_ = true;
       }
     } catch (const std::exception& e) {  // std::invalid_argument, or cv::Exception on odd input
       context_.Reject("frame", e.what());
@@ -223,7 +224,8 @@ class OccupancyNode::Mapper {
     latest_map_version_ = std::max(latest_map_version_, pose.map_version);
     last_header_ = pose.header;
     context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
-    profile_pub_->Publish(ToMessage(pose.header, anchored, static_cast<float>(config_.sensor.reliable_range_m)));
+    profile_pub_->Publish(ToMessage(pose.header, kept ? map_.profiles().back() : anchored,
+                                    static_cast<float>(config_.sensor.reliable_range_m)));
     if (frames_since_rebuild_ < std::numeric_limits<int>::max() / 2) ++frames_since_rebuild_;
     if (pending_correction_ && frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames)
       ApplyPendingCorrection();  // publishes the grid when it rebuilds

@@ -101,11 +101,11 @@ class OdometryNode::Impl {
       dt_s = 0.0;
     }
     Velocity velocity;
-    wall_direction_.reset();
+    std::optional<double> wall_direction;
     try {
       // The first frame's dt is ignored by the odometry but must be valid.
       velocity = odometry_.Update(grey, restart ? 1.0 / config_.visual.camera_hz : dt_s);
-      if (floor_) FloorMotion(image, dt_s, velocity);
+      if (floor_) wall_direction = FloorMotion(image, dt_s, velocity);
     } catch (const std::invalid_argument& e) {
       odometry_.Reset();
       if (floor_) floor_->Reset();
@@ -121,9 +121,9 @@ class OdometryNode::Impl {
     out.vrot_radps = velocity.vrot;
     out.dt_s = dt_s;
     out.source = msg::VelocitySource::VELOCITY_VISUAL;
-    if (wall_direction_) {
+    if (wall_direction) {
       out.wall_seen = true;
-      out.wall_direction_rad = *wall_direction_;
+      out.wall_direction_rad = *wall_direction;
     }
     Publish(out);
     context_.SetLastFrame(image.header.frame_seq, image.header.stamp_ns);
@@ -132,10 +132,10 @@ class OdometryNode::Impl {
   // Replaces the column-profile velocity by the floor-boundary registration's, seeded with it;
   // a frame that cannot be registered keeps the profiles' turn and the floor odometry's
   // constant-velocity step, a turn on the spot (with turns_from_profiles) the profiles' motion
-  // (the registration still sees it, to keep its key frame). Also finds the frame's wall
-  // direction (wall_direction.h) in the same boundary. Throws std::invalid_argument for an
+  // (the registration still sees it, to keep its key frame). Returns the frame's wall direction
+  // (wall_direction.h), found in the same boundary. Throws std::invalid_argument for an
   // image the boundary pipeline cannot read (not bgr8, or not the configured camera's size).
-  void FloorMotion(const msg::Image& image, double dt_s, Velocity& velocity) {
+  std::optional<double> FloorMotion(const msg::Image& image, double dt_s, Velocity& velocity) {
     if (image.encoding != camera::kBgr8)
       throw std::invalid_argument("floor_odometry needs bgr8 images, got " + image.encoding);
     const occupancy::RadialObstacleProfile profile = boundary_->ProfileFromImage(camera::ImageView(image));
@@ -144,14 +144,15 @@ class OdometryNode::Impl {
     prior.dx = velocity.vtrans * dt_s;
     prior.dtheta = velocity.vrot * dt_s;
     const PlanarMotion motion = floor_->Update(boundary_points_, prior);
-    wall_direction_ = WallDirection(boundary_points_, config_.floor.wall_direction);
-    if (dt_s <= 0) return;
+    const std::optional<double> wall_direction = WallDirection(boundary_points_, config_.floor.wall_direction);
+    if (dt_s <= 0) return wall_direction;
     const double turn_in_place = config_.visual.turn_in_place_vrot_radps;
     if (!(config_.floor.turns_from_profiles && turn_in_place > 0 && std::abs(velocity.vrot) >= turn_in_place)) {
       // Unregistered, the floor odometry returns the prior with its constant-velocity forward step.
       velocity.vtrans = motion.dx / dt_s;
       if (motion.measured) velocity.vrot = motion.dtheta / dt_s;
     }
+    return wall_direction;
   }
 
   ServiceContext& context_;
@@ -161,7 +162,6 @@ class OdometryNode::Impl {
   VisualOdometry odometry_;
   std::unique_ptr<occupancy::ObstacleProfilePipeline> boundary_;  // floor odometry only
   std::unique_ptr<FloorOdometry> floor_;
-  std::optional<double> wall_direction_;  // this frame's (floor odometry only)
   std::vector<Eigen::Vector2d> boundary_points_;
   std::optional<int64_t> previous_stamp_ns_;
   cv::Size previous_size_;
