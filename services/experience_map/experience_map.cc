@@ -48,6 +48,10 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
   if (!config_.exp_manhattan) return;
   constexpr double kMinAgreement = 0.9;
   const double direction = accum_facing_ + wall_direction_rad;
+  if (has_current_ && !experiences_[current_].wall_rad) {
+    experiences_[current_].wall_rad = std::remainder(direction - experiences_[current_].th_rad, kPi / 2.0);
+    if (manhattan_axes_ && config_.exp_manhattan_sigma_rad > 0) graph_pending_ = true;
+  }
   if (!manhattan_axes_) {
     manhattan_sum_cos_ += std::cos(4.0 * direction);
     manhattan_sum_sin_ += std::sin(4.0 * direction);
@@ -240,7 +244,10 @@ PoseGraphResult ExperienceMap::OptimiseGraph(int iterations, double stop_below) 
       experiences_, links_,
       {config_.exp_graph_link_sigma_m, config_.exp_graph_link_sigma_rad, config_.exp_graph_closure_sigma_m,
        config_.exp_graph_closure_sigma_rad, config_.exp_graph_closure_robust_phi},
-      iterations, stop_below);
+      iterations, stop_below,
+      manhattan_axes_ && config_.exp_manhattan_sigma_rad > 0
+          ? std::optional<ManhattanAxes>({*manhattan_axes_, config_.exp_manhattan_sigma_rad, config_.exp_manhattan_max_offset_rad})
+          : std::nullopt);
   last_correction_ = result.largest_change;
   graph_pending_ = false;
   frames_since_graph_ = 0;
@@ -428,6 +435,7 @@ void ExperienceMap::MergeFrom(const ExperienceMap& other, const std::vector<MapA
     copy.x_m = tx + c * rx - s * ry;
     copy.y_m = ty + s * rx + c * ry;
     copy.th_rad = ClipAngle(e.th_rad + dth);
+    if (anchors.empty()) copy.wall_rad.reset();  // a part of its own frame: our axes say nothing of it
     experiences_.push_back(copy);
     links_from_.emplace_back();
     links_to_.emplace_back();
@@ -480,6 +488,7 @@ proto::ExperienceMap ExperienceMap::Save() const {
     p->set_pc_x(e.pc_x);
     p->set_pc_y(e.pc_y);
     p->set_pc_th(e.pc_th);
+    if (e.wall_rad) p->set_wall_rad(*e.wall_rad);
   }
   for (const Link& l : links_) {
     auto* p = m.add_links();
@@ -519,7 +528,7 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
     return true;
   };
   for (const auto& e : m.experiences()) {
-    if (!finite({e.x_m(), e.y_m(), e.th_rad(), e.pc_x(), e.pc_y(), e.pc_th()})) {
+    if (!finite({e.x_m(), e.y_m(), e.th_rad(), e.pc_x(), e.pc_y(), e.pc_th(), e.wall_rad()})) {
       Reject("saved experience has non-finite numbers");
     }
   }
@@ -547,7 +556,8 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   experiences_.clear();
   for (uint32_t i = 0; i < n; ++i) {
     const auto& p = m.experiences(i);
-    experiences_.push_back({i, p.x_m(), p.y_m(), ClipAngle(p.th_rad()), p.template_id(), p.pc_x(), p.pc_y(), p.pc_th()});
+    experiences_.push_back({i, p.x_m(), p.y_m(), ClipAngle(p.th_rad()), p.template_id(), p.pc_x(), p.pc_y(), p.pc_th(),
+                            p.has_wall_rad() ? std::optional(p.wall_rad()) : std::nullopt});
   }
   links_.clear();
   links_from_.assign(n, {});

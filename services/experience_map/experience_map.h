@@ -45,6 +45,10 @@ struct Experience {
   double x_m = 0.0, y_m = 0.0, th_rad = 0.0;
   uint32_t template_id = 0;
   double pc_x = 0.0, pc_y = 0.0, pc_th = 0.0;
+  // exp_manhattan: the walls' direction, modulo pi/2, relative to this experience's facing, as
+  // first seen while the robot was at it (ExperienceMap::HoldHeading); the least-squares
+  // correction holds the experience to the building's axes with it.
+  std::optional<double> wall_rad;
 };
 
 struct Link {
@@ -99,7 +103,10 @@ class ExperienceMap {
   // The first exp_manhattan_reference_frames directions, taken in the map frame, fix the
   // building's axes if they agree (resultant length of 4 x the angles at least 0.9; else the
   // next ones are tried); later ones within exp_manhattan_max_offset_rad of an axis turn the
-  // robot's heading exp_manhattan_gain of the way onto it. Without exp_manhattan it does nothing.
+  // robot's heading exp_manhattan_gain of the way onto it. The first direction seen at an
+  // experience is kept with it (Experience::wall_rad): with exp_graph_optimisation and
+  // exp_manhattan_sigma_rad, the least-squares correction holds the experiences themselves to
+  // the axes (pose_graph.h). Without exp_manhattan it does nothing.
   // Throws std::invalid_argument for a non-finite direction.
   void HoldHeading(double wall_direction_rad);
   // The building's axes (one direction modulo pi/2) in the map frame, once fixed.

@@ -58,6 +58,9 @@ struct ExperienceMapConfig {
   int exp_manhattan_reference_frames = 50;
   double exp_manhattan_max_offset_rad = 0.25;
   double exp_manhattan_gain = 0.2;
+  // With exp_graph_optimisation: each experience's first wall direction holds its facing to the
+  // axes in the least-squares correction with this uncertainty (0: only the robot is held).
+  double exp_manhattan_sigma_rad = 0.0;
 
   template <class V>
   void VisitFields(V& v) {
@@ -90,6 +93,8 @@ struct ExperienceMapConfig {
     v("exp_manhattan_max_offset_rad", exp_manhattan_max_offset_rad,
       "a wall direction farther than this from an axis is another wall and is ignored (rad)");
     v("exp_manhattan_gain", exp_manhattan_gain, "share of a wall direction's offset from its axis taken out per frame");
+    v("exp_manhattan_sigma_rad", exp_manhattan_sigma_rad,
+      "> 0, with exp_graph_optimisation: uncertainty of the experiences' wall directions in the least-squares correction (rad)");
   }
 
   void Validate() const {
@@ -116,6 +121,8 @@ struct ExperienceMapConfig {
             "exp_manhattan_max_offset_rad", "must be in (0, pi/4)");
     Require(std::isfinite(exp_manhattan_gain) && exp_manhattan_gain > 0 && exp_manhattan_gain <= 1,
             "exp_manhattan_gain", "must be in (0, 1]");
+    Require(std::isfinite(exp_manhattan_sigma_rad) && exp_manhattan_sigma_rad >= 0, "exp_manhattan_sigma_rad",
+            "must be >= 0");
   }
 };
 

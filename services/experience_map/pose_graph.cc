@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <numeric>
 
 namespace rslam::experience_map {
@@ -35,7 +36,8 @@ std::vector<int> FreeIndices(size_t n, const std::vector<Link>& links) {
 }  // namespace
 
 PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
-                                  const PoseGraphSigmas& sigmas, int iterations, double stop_below) {
+                                  const PoseGraphSigmas& sigmas, int iterations, double stop_below,
+                                  const std::optional<ManhattanAxes>& manhattan) {
   const std::vector<int> index = FreeIndices(experiences.size(), links);
   const int size = static_cast<int>(3 * std::count_if(index.begin(), index.end(), [](int i) { return i >= 0; }));
   PoseGraphResult result;
@@ -91,6 +93,19 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
             for (int q = 0; q < 3; ++q) triplets.emplace_back(at[a] + r, at[b] + q, block(r, q));
           }
         }
+      }
+    }
+    if (manhattan) {
+      // A unary term on theta: every free experience has a theta diagonal entry from its links,
+      // so the pattern stays the one analysed at the first step.
+      const double weight = 1 / (manhattan->sigma_rad * manhattan->sigma_rad);
+      for (size_t e = 0; e < experiences.size(); ++e) {
+        if (index[e] < 0 || !experiences[e].wall_rad) continue;
+        const double error =
+            std::remainder(experiences[e].th_rad + *experiences[e].wall_rad - manhattan->axes_rad, std::numbers::pi / 2);
+        if (std::abs(error) > manhattan->max_offset_rad) continue;
+        gradient[index[e] + 2] += weight * error;
+        triplets.emplace_back(index[e] + 2, index[e] + 2, weight);
       }
     }
     Eigen::SparseMatrix<double> hessian(size, size);

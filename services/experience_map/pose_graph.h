@@ -16,6 +16,7 @@
 // The lowest-id experience of every connected part of the map stays where it is (the gauge: the
 // map frame does not move, and merged maps without anchors stay apart).
 
+#include <optional>
 #include <vector>
 
 #include "services/experience_map/experience_map.h"
@@ -29,9 +30,20 @@ struct PoseGraphSigmas {
   double closure_robust_phi = 0;   // > 0: scale down closures that disagree (see pose_graph.cc)
 };
 
+// The building's axes (exp_manhattan): an experience with a wall direction w (relative to its
+// facing, modulo pi/2) adds the error r = theta + w - axes_rad (modulo pi/2) weighted by
+// 1/sigma_rad^2, while |r| <= max_offset_rad (farther off, the wall is taken for another one and
+// the term is left out for that step).
+struct ManhattanAxes {
+  double axes_rad;
+  double sigma_rad;
+  double max_offset_rad;
+};
+
 // Runs up to `iterations` Gauss-Newton steps over all experiences and links, fewer when a step
 // moves nothing by more than stop_below (m or rad). Links must name existing experiences.
 PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
-                                  const PoseGraphSigmas& sigmas, int iterations, double stop_below = 0.0);
+                                  const PoseGraphSigmas& sigmas, int iterations, double stop_below = 0.0,
+                                  const std::optional<ManhattanAxes>& manhattan = std::nullopt);
 
 }  // namespace rslam::experience_map
