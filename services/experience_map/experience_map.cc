@@ -29,7 +29,7 @@ std::string Id(uint32_t id) { return id == kNoExperience ? std::string("none") :
 
 ExperienceMap::ExperienceMap(const ExperienceMapConfig& config)
     : config_((config.Validate(), config)),
-      accum_facing_(ClipAngle(config.exp_initial_em_deg * kPi / 180.0)) {}
+      accum_facing_(WrapAngle(config.exp_initial_em_deg * kPi / 180.0)) {}
 
 void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s) {
   if (!std::isfinite(vtrans_mps)) Reject("vtrans is not finite");
@@ -37,7 +37,7 @@ void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s)
   if (!std::isfinite(dt_s) || dt_s < 0) Reject("dt must be finite and >= 0");
   const double dist = vtrans_mps * dt_s;
   // OpenRatSLAM order: turn, then move along the new facing.
-  accum_facing_ = ClipAngle(accum_facing_ + vrot_radps * dt_s);
+  accum_facing_ = WrapAngle(accum_facing_ + vrot_radps * dt_s);
   accum_x_ += dist * std::cos(accum_facing_);
   accum_y_ += dist * std::sin(accum_facing_);
   accum_time_ += dt_s;
@@ -64,7 +64,7 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
   }
   const double offset = std::remainder(direction - *manhattan_axes_, kPi / 2.0);
   if (std::abs(offset) > config_.exp_manhattan_max_offset_rad) return;
-  accum_facing_ = ClipAngle(accum_facing_ - config_.exp_manhattan_gain * offset);
+  accum_facing_ = WrapAngle(accum_facing_ - config_.exp_manhattan_gain * offset);
 }
 
 ExperienceMap::Observation ExperienceMap::ObservedFromCurrent(double relative_angle_rad) const {
@@ -72,8 +72,8 @@ ExperienceMap::Observation ExperienceMap::ObservedFromCurrent(double relative_an
   // experience faces accum_facing_ - relative_angle_rad. OpenRatSLAM adds the angle here and in
   // on_set_experience alike, which puts twice the view's offset into every link it closes.
   const Experience& cur = experiences_[current_];
-  return {std::hypot(accum_x_, accum_y_), ClipAngle(std::atan2(accum_y_, accum_x_) - cur.th_rad),
-          ClipAngle(accum_facing_ - relative_angle_rad - cur.th_rad), accum_time_};
+  return {std::hypot(accum_x_, accum_y_), WrapAngle(std::atan2(accum_y_, accum_x_) - cur.th_rad),
+          WrapAngle(accum_facing_ - relative_angle_rad - cur.th_rad), accum_time_};
 }
 
 int ExperienceMap::FindLink(uint32_t from, uint32_t to) const {
@@ -102,8 +102,8 @@ void ExperienceMap::AverageInto(Link& link, const Observation& obs, bool reverse
   Observation o = obs;
   if (reversed) {
     // The observation runs to -> from: invert the transform into the link's direction.
-    o.heading = ClipAngle(obs.heading - obs.facing + kPi);
-    o.facing = ClipAngle(-obs.facing);
+    o.heading = WrapAngle(obs.heading - obs.facing + kPi);
+    o.facing = WrapAngle(-obs.facing);
   }
   // 000 eq. 2 with A = n/(n+1), B = 1/(n+1): a running mean over the traversals.
   const double n = link.traversals;
@@ -112,7 +112,7 @@ void ExperienceMap::AverageInto(Link& link, const Observation& obs, bool reverse
   const double vy = a * link.d_m * std::sin(link.heading_rad) + b * o.d * std::sin(o.heading);
   link.d_m = std::hypot(vx, vy);
   link.heading_rad = std::atan2(vy, vx);
-  link.facing_rad = ClipAngle(link.facing_rad + b * ClipAngle(o.facing - link.facing_rad));
+  link.facing_rad = WrapAngle(link.facing_rad + b * WrapAngle(o.facing - link.facing_rad));
   link.travel_time_s = a * link.travel_time_s + b * o.time;
   link.traversals += 1;
 }
@@ -122,7 +122,7 @@ void ExperienceMap::SetCurrent(uint32_t id, double relative_angle_rad) {
   current_ = id;
   has_current_ = true;
   accum_x_ = accum_y_ = accum_time_ = 0.0;
-  accum_facing_ = ClipAngle(experiences_[id].th_rad + relative_angle_rad);
+  accum_facing_ = WrapAngle(experiences_[id].th_rad + relative_angle_rad);
 }
 
 void ExperienceMap::ValidateIds(const ExperienceAction& a) const {
@@ -176,7 +176,7 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         e.x_m = accum_x_;
         e.y_m = accum_y_;
       }
-      e.th_rad = ClipAngle(accum_facing_);
+      e.th_rad = WrapAngle(accum_facing_);
       e.template_id = a.template_id;
       e.pc_x = a.pc_x;
       e.pc_y = a.pc_y;
@@ -215,8 +215,8 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       const Pose2 dead_reckoned = RobotPose();
       SetCurrent(to, a.relative_angle_rad);
       if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
-        accum_facing_ = ClipAngle(dead_reckoned.th_rad +
-                                  config_.exp_heading_correction * ClipAngle(accum_facing_ - dead_reckoned.th_rad));
+        accum_facing_ = WrapAngle(dead_reckoned.th_rad +
+                                  config_.exp_heading_correction * WrapAngle(accum_facing_ - dead_reckoned.th_rad));
       }
       if (config_.exp_position_correction < 1.0) {  // at 1 the robot is on the experience (OpenRatSLAM)
         const double keep = 1.0 - config_.exp_position_correction;
@@ -279,9 +279,9 @@ double ExperienceMap::RelaxLink(uint32_t index) {
   from.y_m += ey;
   to.x_m -= ex;
   to.y_m -= ey;
-  const double df = ClipAngle(to.th_rad - (from.th_rad + link.facing_rad)) * alpha;
-  from.th_rad = ClipAngle(from.th_rad + df);
-  to.th_rad = ClipAngle(to.th_rad - df);
+  const double df = WrapAngle(to.th_rad - (from.th_rad + link.facing_rad)) * alpha;
+  from.th_rad = WrapAngle(from.th_rad + df);
+  to.th_rad = WrapAngle(to.th_rad - df);
   return std::max({std::abs(ex), std::abs(ey), std::abs(df)});
 }
 
@@ -421,7 +421,7 @@ void ExperienceMap::MergeFrom(const ExperienceMap& other, const std::vector<MapA
   if (!anchors.empty()) {
     const Experience& mine = experiences_[anchors[0].this_id];
     const Experience& theirs = other.experiences_[anchors[0].other_id];
-    dth = ClipAngle(mine.th_rad - theirs.th_rad);
+    dth = WrapAngle(mine.th_rad - theirs.th_rad);
     ox = theirs.x_m;
     oy = theirs.y_m;
     tx = mine.x_m;
@@ -434,7 +434,7 @@ void ExperienceMap::MergeFrom(const ExperienceMap& other, const std::vector<MapA
     const double rx = e.x_m - ox, ry = e.y_m - oy;
     copy.x_m = tx + c * rx - s * ry;
     copy.y_m = ty + s * rx + c * ry;
-    copy.th_rad = ClipAngle(e.th_rad + dth);
+    copy.th_rad = WrapAngle(e.th_rad + dth);
     if (anchors.empty()) copy.wall_rad.reset();  // a part of its own frame: our axes say nothing of it
     experiences_.push_back(copy);
     links_from_.emplace_back();
@@ -556,7 +556,7 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   experiences_.clear();
   for (uint32_t i = 0; i < n; ++i) {
     const auto& p = m.experiences(i);
-    experiences_.push_back({i, p.x_m(), p.y_m(), ClipAngle(p.th_rad()), p.template_id(), p.pc_x(), p.pc_y(), p.pc_th(),
+    experiences_.push_back({i, p.x_m(), p.y_m(), WrapAngle(p.th_rad()), p.template_id(), p.pc_x(), p.pc_y(), p.pc_th(),
                             p.has_wall_rad() ? std::optional(p.wall_rad()) : std::nullopt});
   }
   links_.clear();

@@ -37,6 +37,7 @@
 #include "services/experience_map/experience_action.h"
 #include "services/experience_map/experience_map_config.h"
 #include "services/experience_map/proto/experience_map.pb.h"
+#include "common/math/angle.h"
 
 namespace rslam::experience_map {
 
@@ -60,16 +61,6 @@ struct Link {
   uint32_t traversals = 1;
   bool closes_loop = false;  // made by recognising a known place (kLink), not by a kCreate
 };
-
-// Angle in (-pi, pi], as the map keeps them.
-inline double ClipAngle(double a) {
-  constexpr double kPi = std::numbers::pi;
-  if (a > kPi || a <= -kPi) {
-    a = std::remainder(a, 2.0 * kPi);
-    if (a <= -kPi) a += 2.0 * kPi;
-  }
-  return a;
-}
 
 // What a least-squares correction (pose_graph.h) did.
 struct PoseGraphResult {

@@ -63,7 +63,7 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
       const double px = to.x_m - from.x_m, py = to.y_m - from.y_m;
       const Eigen::Vector3d error(c * px + s * py - l.d_m * std::cos(l.heading_rad),
                                   -s * px + c * py - l.d_m * std::sin(l.heading_rad),
-                                  ClipAngle(to.th_rad - from.th_rad - l.facing_rad));
+                                  WrapAngle(to.th_rad - from.th_rad - l.facing_rad));
       Eigen::Matrix3d jf, jt;  // d error / d (x, y, theta) of from and of to
       jf << -c, -s, -s * px + c * py,  //
           s, -c, -c * px - s * py,     //
@@ -121,7 +121,7 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
       Experience& x = experiences[e];
       x.x_m += d[0];
       x.y_m += d[1];
-      x.th_rad = ClipAngle(x.th_rad + d[2]);
+      x.th_rad = WrapAngle(x.th_rad + d[2]);
       moved = std::max({moved, std::abs(d[0]), std::abs(d[1]), std::abs(d[2])});
     }
     result.largest_change = std::max(result.largest_change, moved);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -465,7 +466,7 @@ proto::ExperienceMap LongSquareWithAWrongClosure(double off_m, double off_rad) {
     auto* e = m.add_experiences();
     e->set_x_m(cx[side] + 0.1 * along * std::cos(th));
     e->set_y_m(cy[side] + 0.1 * along * std::sin(th));
-    e->set_th_rad(ClipAngle(th));
+    e->set_th_rad(WrapAngle(th));
   }
   const int n = 4 * kPerSide;
   for (int i = 0; i < n; ++i) {
@@ -607,6 +608,76 @@ TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
     } catch (const ConfigError& e) {
       EXPECT_EQ(e.key(), key);
     }
+  }
+}
+
+// The robot drives straight along walls that lie on the map's axes (seen at 0 rad in the robot
+// frame) while the odometry turns it 0.01 rad per experience: the least-squares correction, with
+// the experiences' walls in it, takes most of that turn back out of the map. The robot's own hold
+// is left out (a gain of 1e-9) to see the experiences' terms alone.
+std::unique_ptr<ExperienceMap> DriftingAlongWalls(double sigma_rad, double wall_rad) {
+  ExperienceMapConfig config = LeastSquares(1);
+  config.exp_initial_em_deg = 0;
+  config.exp_manhattan = true;
+  config.exp_manhattan_reference_frames = 5;
+  config.exp_manhattan_gain = 1e-9;
+  config.exp_manhattan_sigma_rad = sigma_rad;
+  config.exp_graph_link_sigma_rad = 0.05;  // a long chain's turn is as unsure as this short one's
+  auto map = std::make_unique<ExperienceMap>(config);
+  map->Apply(Create(0, kNoExperience));
+  for (int i = 0; i < 5; ++i) map->HoldHeading(0.0);  // the axes at 0; experience 0's wall too
+  for (uint32_t id = 1; id <= 20; ++id) {
+    map->Integrate(1.0, 0.01, 1.0);
+    map->Apply(Create(id, id - 1));
+    map->HoldHeading(wall_rad);
+  }
+  map->Apply(ExperienceAction{});
+  return map;
+}
+
+TEST(ExperienceMap, LeastSquaresHoldsTheExperiencesToTheWalls) {
+  const std::unique_ptr<ExperienceMap> free_map = DriftingAlongWalls(0.0, 0.0);
+  const std::unique_ptr<ExperienceMap> held_map = DriftingAlongWalls(0.05, 0.0);
+  const ExperienceMap& free = *free_map;
+  const ExperienceMap& held = *held_map;
+  // Each experience keeps the first wall seen at it, relative to its own facing: 0 where the
+  // robot faced as the experience (no correction in between), without a correction.
+  for (const Experience& e : free.experiences()) {
+    ASSERT_TRUE(e.wall_rad.has_value()) << e.id;
+    EXPECT_NEAR(*e.wall_rad, 0.0, 1e-12) << e.id;
+  }
+  // Without the terms nothing corrects the map: the last experience faces 0.2 rad, 2.1 m off the
+  // line; with them -0.04 rad and 0.14 m.
+  EXPECT_NEAR(free.experiences().back().th_rad, 0.2, 1e-6);
+  EXPECT_GT(free.experiences().back().y_m, 2.0);
+  EXPECT_LT(std::abs(held.experiences().back().th_rad), 0.05);
+  EXPECT_LT(std::abs(held.experiences().back().y_m), 0.2);
+  ASSERT_TRUE(held.manhattan_axes().has_value());
+  EXPECT_NEAR(*held.manhattan_axes(), 0.0, 1e-12);
+
+  // Walls 0.5 rad off the axes are other walls: the terms leave the map as the links have it.
+  EXPECT_NEAR(DriftingAlongWalls(0.05, 0.5)->experiences().back().th_rad, 0.2, 1e-6);
+
+  // The walls survive a save and a load; a map merged in without anchors keeps none (its frame
+  // is its own, the axes are this map's).
+  ExperienceMap loaded(held.config());
+  loaded.Load(held.Save());
+  EXPECT_EQ(loaded.experiences().back().wall_rad, held.experiences().back().wall_rad);
+  proto::ExperienceMap bad = held.Save();
+  bad.mutable_experiences(3)->set_wall_rad(std::numeric_limits<double>::infinity());
+  EXPECT_THROW(loaded.Load(bad), std::invalid_argument);
+  ExperienceMap merged(held.config());
+  merged.Apply(Create(0, kNoExperience));
+  merged.MergeFrom(held, {});
+  EXPECT_FALSE(merged.experiences().back().wall_rad.has_value());
+
+  ExperienceMapConfig negative = held.config();
+  negative.exp_manhattan_sigma_rad = -0.1;
+  try {
+    negative.Validate();
+    ADD_FAILURE() << "a negative exp_manhattan_sigma_rad was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.key(), "exp_manhattan_sigma_rad");
   }
 }
 
