@@ -6,13 +6,13 @@
 #include <string>
 
 #include "services/explorer/exploration_transform.h"
+#include "common/math/angle.h"
 
 namespace rslam::explorer {
 
 namespace {
 
 bool IsFinite(const Pose2D& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
-double NormalizeAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
 
 // Distance from (px, py) to the segment from (x0, y0) along (sx, sy).
 double DistanceToSegment(double px, double py, double x0, double y0, double sx, double sy) {
@@ -160,7 +160,7 @@ std::optional<Plan> ExplorationPlanner::StepOutOfRadius(const GridView& occupanc
   }
   if (!best) return std::nullopt;
   Plan plan;
-  const double turn = NormalizeAngle(best->theta - robot.theta);
+  const double turn = WrapAngle(best->theta - robot.theta);
   if (std::abs(turn) > 1e-9) plan.commands.push_back({MotionCommand::Kind::kRotate, turn, 0.0, 0});
   plan.commands.push_back({MotionCommand::Kind::kMove, 0.0, distance, 0});
   plan.has_target = true;
@@ -412,7 +412,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       const double distance = std::hypot(wx - x, wy - y);
       if (distance < 1e-9) continue;
       const double heading = std::atan2(wy - y, wx - x);
-      const double turn = NormalizeAngle(heading - theta);
+      const double turn = WrapAngle(heading - theta);
       if (std::abs(turn) > 1e-9) plan.commands.push_back({MotionCommand::Kind::kRotate, turn, 0.0, 0});
       plan.commands.push_back({MotionCommand::Kind::kMove, 0.0, distance, 0});
       if (!blocked) blocked = ObstacleOnPath(occupancy, {x, y, heading}, distance);

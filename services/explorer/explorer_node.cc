@@ -14,6 +14,7 @@
 #include "common/persistence/state_file.h"
 #include "services/explorer/exploration_planner.h"
 #include "services/explorer/proto/explorer_node_state.pb.h"
+#include "common/math/angle.h"
 
 namespace rslam::explorer {
 
@@ -52,7 +53,7 @@ msg::MotionKind ToMessageKind(MotionCommand::Kind kind) {
 // The pose after a command that completed as planned.
 Pose2D Apply(const Pose2D& p, const MotionCommand& c) {
   switch (c.kind) {
-    case MotionCommand::Kind::kRotate: return {p.x, p.y, std::remainder(p.theta + c.angle_rad, 2 * M_PI)};
+    case MotionCommand::Kind::kRotate: return {p.x, p.y, WrapAngle(p.theta + c.angle_rad)};
     case MotionCommand::Kind::kMove:
       return {p.x + c.distance_m * std::cos(p.theta), p.y + c.distance_m * std::sin(p.theta), p.theta};
     default: return p;

@@ -1,4 +1,5 @@
 #include "services/occupancy/anchored_profile_map.h"
+#include "common/math/angle.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -36,7 +37,7 @@ bool AnchoredProfileMap::IsNewView(uint64_t experience_id, const Pose2D& offset,
   if (profiles_.empty() || profiles_.back().experience_id != experience_id) return true;
   const Pose2D& last = profiles_.back().offset;
   return std::hypot(offset.x - last.x, offset.y - last.y) >= min_spacing_m ||
-         std::abs(std::remainder(offset.theta - last.theta, 2.0 * M_PI)) >= min_turn_rad;
+         std::abs(WrapAngle(offset.theta - last.theta)) >= min_turn_rad;
 }
 
 size_t AnchoredProfileMap::Rebuild(const ExperiencePoseLookup& lookup) {

@@ -196,7 +196,7 @@ class OccupancyNode::Mapper {
       if (it == poses.end()) continue;
       const Pose2D& now = it->second;
       if (std::hypot(now.x - p.experience_pose.x, now.y - p.experience_pose.y) >= config_.rebuild_min_shift_m ||
-          std::abs(NormalizeAngle(now.theta - p.experience_pose.theta)) >= config_.rebuild_min_turn_rad)
+          std::abs(WrapAngle(now.theta - p.experience_pose.theta)) >= config_.rebuild_min_turn_rad)
         return true;
     }
     return false;

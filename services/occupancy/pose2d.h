@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "common/math/angle.h"
+
 namespace rslam::occupancy {
 
 struct Pose2D {
@@ -12,19 +14,17 @@ struct Pose2D {
   double theta = 0.0;
 };
 
-inline double NormalizeAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
-
 // a ⊕ b: b expressed in a's frame, returned in the frame a is expressed in.
 inline Pose2D Compose(const Pose2D& a, const Pose2D& b) {
   const double c = std::cos(a.theta), s = std::sin(a.theta);
-  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, NormalizeAngle(a.theta + b.theta)};
+  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, WrapAngle(a.theta + b.theta)};
 }
 
 // a⁻¹ ⊕ b: b expressed in a's frame.
 inline Pose2D Between(const Pose2D& a, const Pose2D& b) {
   const double c = std::cos(a.theta), s = std::sin(a.theta);
   const double dx = b.x - a.x, dy = b.y - a.y;
-  return {c * dx + s * dy, -s * dx + c * dy, NormalizeAngle(b.theta - a.theta)};
+  return {c * dx + s * dy, -s * dx + c * dy, WrapAngle(b.theta - a.theta)};
 }
 
 inline bool IsFinite(const Pose2D& p) {

@@ -1,4 +1,5 @@
 #include "services/odometry/floor_odometry.h"
+#include "common/math/angle.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,7 +22,7 @@ PlanarMotion Between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   PlanarMotion m;
   m.dx = c * ex + s * ey;
   m.dy = -s * ex + c * ey;
-  m.dtheta = std::remainder(b.z() - a.z(), 2.0 * M_PI);
+  m.dtheta = WrapAngle(b.z() - a.z());
   return m;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "services/templates/jeffrey_divergence.h"
+#include "common/math/angle.h"
 
 
 namespace rslam::templates {
@@ -19,13 +20,6 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // OpenRatSLAM's slack on the mean prefilter: template means are of the whole template, the
 // comparison is over a shifted window, so the gap is only approximately a lower bound.
 constexpr double kMeanPrefilterSlack = 0.005;
-
-double WrapAngle(double a) {
-  a = std::fmod(a, 2.0 * std::numbers::pi);
-  if (a > std::numbers::pi) a -= 2.0 * std::numbers::pi;
-  if (a <= -std::numbers::pi) a += 2.0 * std::numbers::pi;
-  return a;
-}
 
 TemplateConfig Validated(TemplateConfig config) {
   config.Validate();

@@ -1,4 +1,5 @@
 #include "tools/eval/trajectory_alignment.h"
+#include "common/math/angle.h"
 
 #include <Eigen/Geometry>
 
@@ -24,11 +25,6 @@ void RequireValid(std::span<const StampedPose2D> poses, const char* which) {
                                   " (" + std::to_string(p.stamp_ns) + " ns) does not");
     }
   }
-}
-
-double WrapAngle(double a) {
-  a = std::remainder(a, 2.0 * std::numbers::pi);
-  return a;
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 
 #include <cmath>
 
+#include "common/math/angle.h"
+
 namespace rslam::sim {
 
 struct Pose2D {
@@ -12,11 +14,5 @@ struct Pose2D {
 
   bool IsFinite() const { return std::isfinite(x) && std::isfinite(y) && std::isfinite(theta); }
 };
-
-// Wraps an angle to (-pi, pi].
-inline double WrapAngle(double a) {
-  a = std::remainder(a, 2.0 * M_PI);
-  return a <= -M_PI ? a + 2.0 * M_PI : a;
-}
 
 }  // namespace rslam::sim
