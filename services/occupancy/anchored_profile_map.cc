@@ -22,14 +22,18 @@ Pose2D FromProtoPose(const proto::Pose2D& p) { return {p.x(), p.y(), p.theta()};
 AnchoredProfileMap::AnchoredProfileMap(GridConfig grid, SensorModelConfig sensor)
     : grid_(std::move(grid), std::move(sensor)) {}
 
+void AnchoredProfileMap::AddProfile(AnchoredProfile anchored) {
+  if (!IsFinite(anchored.experience_pose) || !IsFinite(anchored.offset))
+    throw std::invalid_argument("experience pose or offset is not finite");
+  grid_.InsertProfile(anchored.profile, Compose(anchored.experience_pose, anchored.offset));
+  profiles_.push_back(std::move(anchored));
+}
+
 void AnchoredProfileMap::AddProfile(uint64_t experience_id, const Pose2D& experience_pose,
                                     const Pose2D& robot_pose, RadialObstacleProfile profile) {
   if (!IsFinite(experience_pose) || !IsFinite(robot_pose))
     throw std::invalid_argument("experience or robot pose is not finite");
-  AnchoredProfile anchored{experience_id, Between(experience_pose, robot_pose), experience_pose,
-                           std::move(profile)};
-  grid_.InsertProfile(anchored.profile, robot_pose);
-  profiles_.push_back(std::move(anchored));
+  AddProfile({experience_id, Between(experience_pose, robot_pose), experience_pose, std::move(profile)});
 }
 
 bool AnchoredProfileMap::IsNewView(uint64_t experience_id, const Pose2D& offset, double min_spacing_m,

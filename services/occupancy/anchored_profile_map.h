@@ -30,8 +30,10 @@ class AnchoredProfileMap {
 
   AnchoredProfileMap(GridConfig grid, SensorModelConfig sensor);
 
-  // Anchors a profile taken at robot_pose while experience_id (at experience_pose) was current,
-  // and inserts it into the grid. Throws std::invalid_argument on non-finite poses.
+  // Keeps an anchored profile and inserts it into the grid at experience_pose ⊕ offset. Throws
+  // std::invalid_argument on non-finite poses.
+  void AddProfile(AnchoredProfile anchored);
+  // The same for a profile taken at robot_pose while experience_id (at experience_pose) was current.
   void AddProfile(uint64_t experience_id, const Pose2D& experience_pose, const Pose2D& robot_pose,
                   RadialObstacleProfile profile);
 

@@ -214,7 +214,7 @@ class OccupancyNode::Mapper {
       anchored.profile = pipeline_.ProfileFromImage(view);
       if (map_.IsNewView(pose.current_experience_id, anchored.offset, config_.profile_min_spacing_m,
                          config_.profile_min_turn_rad)) {
-        map_.AddProfile(pose.current_experience_id, experience, robot, std::move(anchored.profile));
+        map_.AddProfile(std::move(anchored));
         kept = dirty_ = true;
       }
     } catch (const std::exception& e) {  // std::invalid_argument, or cv::Exception on odd input
@@ -265,7 +265,7 @@ class OccupancyNode::Mapper {
     AnchoredProfileMap saved = AnchoredProfileMap::FromProto(state);  // validates the whole message
     // Replay into the configured grid (the saved grid parameters may differ from today's config).
     for (const AnchoredProfile& p : saved.profiles())
-      map_.AddProfile(p.experience_id, p.experience_pose, Compose(p.experience_pose, p.offset), p.profile);
+      map_.AddProfile(p);
     spdlog::info("loaded {} anchored profiles from {}", map_.profiles().size(), path);
   }
 
