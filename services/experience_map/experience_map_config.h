@@ -59,7 +59,9 @@ struct ExperienceMapConfig {
   double exp_manhattan_max_offset_rad = 0.25;
   double exp_manhattan_gain = 0.2;
   // With exp_graph_optimisation: each experience's first wall direction holds its facing to the
-  // axes in the least-squares correction with this uncertainty (0: only the robot is held).
+  // axes in the least-squares correction with this uncertainty (0: only the robot is held). An
+  // experience given its wall direction calls for a correction, as a closure does (at most one
+  // every exp_graph_period_frames).
   double exp_manhattan_sigma_rad = 0.0;
 
   template <class V>
