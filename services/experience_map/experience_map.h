@@ -34,10 +34,10 @@
 #include <optional>
 #include <vector>
 
+#include "common/math/angle.h"
 #include "services/experience_map/experience_action.h"
 #include "services/experience_map/experience_map_config.h"
 #include "services/experience_map/proto/experience_map.pb.h"
-#include "common/math/angle.h"
 
 namespace rslam::experience_map {
 

@@ -5,8 +5,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "services/explorer/exploration_transform.h"
 #include "common/math/angle.h"
+#include "services/explorer/exploration_transform.h"
 
 namespace rslam::explorer {
 

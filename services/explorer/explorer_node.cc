@@ -11,10 +11,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/math/angle.h"
 #include "common/persistence/state_file.h"
 #include "services/explorer/exploration_planner.h"
 #include "services/explorer/proto/explorer_node_state.pb.h"
-#include "common/math/angle.h"
 
 namespace rslam::explorer {
 

@@ -1,5 +1,4 @@
 #include "services/occupancy/anchored_profile_map.h"
-#include "common/math/angle.h"
 
 #include <cmath>
 #include <stdexcept>

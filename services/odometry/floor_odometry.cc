@@ -1,9 +1,10 @@
 #include "services/odometry/floor_odometry.h"
-#include "common/math/angle.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include "common/math/angle.h"
 
 namespace rslam::odometry {
 

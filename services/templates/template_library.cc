@@ -7,8 +7,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "services/templates/jeffrey_divergence.h"
 #include "common/math/angle.h"
+#include "services/templates/jeffrey_divergence.h"
 
 
 namespace rslam::templates {

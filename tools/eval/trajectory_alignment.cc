@@ -1,5 +1,4 @@
 #include "tools/eval/trajectory_alignment.h"
-#include "common/math/angle.h"
 
 #include <Eigen/Geometry>
 
@@ -9,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "common/math/angle.h"
 
 namespace rslam::eval {
 

@@ -5,7 +5,8 @@
 // BM_ExperienceMapFrameFullRelaxation is OpenRatSLAM's behaviour (10 full sweeps per action);
 // BM_ExperienceMapFrameLeastSquares corrects by least squares (pose_graph.h) every 50 frames
 // instead, and BM_ExperienceMapLeastSquaresCorrection is one such correction (2 Gauss-Newton
-// steps over the whole map).
+// steps over the whole map); ...WithWalls the same with every experience's wall direction held to
+// the building's axes (exp_manhattan_sigma_rad).
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -20,7 +21,7 @@ using rslam::experience_map::ExperienceMap;
 using rslam::experience_map::ExperienceMapConfig;
 namespace pb = rslam::experience_map::proto;
 
-pb::ExperienceMap BuildLaps(int n) {
+pb::ExperienceMap BuildLaps(int n, bool walls = false) {
   constexpr int kLap = 100;
   const double step = 2.0 * std::numbers::pi / kLap;
   const double radius = 50.0;
@@ -38,7 +39,9 @@ pb::ExperienceMap BuildLaps(int n) {
     e->set_y_m(radius * std::sin(a) + 0.3 * noise());
     e->set_th_rad(std::remainder(a + std::numbers::pi / 2, 2 * std::numbers::pi));
     e->set_template_id(i);
+    if (walls) e->set_wall_rad(std::remainder(-e->th_rad() + 0.05 * noise(), std::numbers::pi / 2));
   }
+  m.set_has_manhattan_axes(walls);
   auto link = [&](int from, int to, double d, double heading, double facing) {
     auto* l = m.add_links();
     l->set_from_id(from);
@@ -98,10 +101,12 @@ void BM_ExperienceMapFrameLeastSquares(benchmark::State& state) {
   RunFrames(state, cfg);
 }
 
-void BM_ExperienceMapLeastSquaresCorrection(benchmark::State& state) {
-  const pb::ExperienceMap laps = BuildLaps(static_cast<int>(state.range(0)));
+void RunCorrection(benchmark::State& state, bool walls) {
+  const pb::ExperienceMap laps = BuildLaps(static_cast<int>(state.range(0)), walls);
   ExperienceMapConfig cfg;
   cfg.exp_graph_optimisation = true;
+  cfg.exp_manhattan = walls;
+  cfg.exp_manhattan_sigma_rad = 0.05;
   ExperienceMap map(cfg);
   for (auto _ : state) {
     state.PauseTiming();
@@ -113,9 +118,13 @@ void BM_ExperienceMapLeastSquaresCorrection(benchmark::State& state) {
   state.counters["links"] = static_cast<double>(map.links().size());
 }
 
+void BM_ExperienceMapLeastSquaresCorrection(benchmark::State& state) { RunCorrection(state, false); }
+void BM_ExperienceMapLeastSquaresCorrectionWithWalls(benchmark::State& state) { RunCorrection(state, true); }
+
 BENCHMARK(BM_ExperienceMapFrameBudgeted)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ExperienceMapFrameFullRelaxation)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ExperienceMapFrameLeastSquares)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ExperienceMapLeastSquaresCorrection)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ExperienceMapLeastSquaresCorrectionWithWalls)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
 
 }  // namespace
