@@ -21,6 +21,10 @@
 
 namespace rslam::odometry {
 
+// Floor-boundary points (bearing order) farther apart than this are not neighbours on one
+// boundary line: the floor odometry's normals and the wall directions both split lines there.
+constexpr double kBoundaryNeighbourMaxDistanceM = 0.12;
+
 // Reference points with the unit normal of the boundary line at each.
 struct BoundaryScan {
   std::vector<Eigen::Vector2d> points;
@@ -28,7 +32,7 @@ struct BoundaryScan {
 
   // Normals from each point's bearing neighbours closer than neighbour_max_distance_m; a lone
   // point gets the viewing ray as normal (point-to-point along the ray).
-  static BoundaryScan FromPoints(std::vector<Eigen::Vector2d> points, double neighbour_max_distance_m = 0.12);
+  static BoundaryScan FromPoints(std::vector<Eigen::Vector2d> points, double neighbour_max_distance_m = kBoundaryNeighbourMaxDistanceM);
 };
 
 struct AlignmentOptions {

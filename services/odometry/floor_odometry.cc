@@ -27,9 +27,6 @@ PlanarMotion Between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return m;
 }
 
-// Key points farther apart than this are not neighbours on one boundary line.
-constexpr double kNeighbourMaxDistanceM = 0.12;
-
 }  // namespace
 
 FloorOdometry::FloorOdometry(FloorOdometryConfig config) : config_(std::move(config)) { config_.Validate(); }
@@ -53,7 +50,7 @@ double FloorOdometry::CoastStep() const {
 }
 
 void FloorOdometry::MakeKeyFrame(std::vector<Eigen::Vector2d>&& points) {
-  key_ = BoundaryScan::FromPoints(std::move(points), kNeighbourMaxDistanceM);
+  key_ = BoundaryScan::FromPoints(std::move(points));
   key_to_robot_.setZero();
   has_key_ = true;
 }

@@ -2,11 +2,9 @@
 
 #include <cmath>
 
-namespace rslam::odometry {
+#include "services/odometry/boundary_scan.h"
 
-namespace {
-constexpr double kNeighbourMaxDistanceM = 0.12;  // farther apart: not one boundary line (as floor_odometry)
-}  // namespace
+namespace rslam::odometry {
 
 std::optional<double> WallDirection(std::span<const Eigen::Vector2d> boundary, const WallDirectionConfig& config) {
   const size_t k = static_cast<size_t>(config.baseline_points);
@@ -15,7 +13,7 @@ std::optional<double> WallDirection(std::span<const Eigen::Vector2d> boundary, c
     if (boundary[i].norm() > config.max_range_m || boundary[i + k].norm() > config.max_range_m) continue;
     bool one_line = true;
     for (size_t j = i; j < i + k && one_line; ++j)
-      one_line = (boundary[j + 1] - boundary[j]).norm() <= kNeighbourMaxDistanceM;
+      one_line = (boundary[j + 1] - boundary[j]).norm() <= kBoundaryNeighbourMaxDistanceM;
     if (!one_line) continue;
     const Eigen::Vector2d d = boundary[i + k] - boundary[i];
     const double l = d.norm();
