@@ -44,18 +44,36 @@ bool AnchoredProfileMap::IsNewView(uint64_t experience_id, const Pose2D& offset,
 }
 
 size_t AnchoredProfileMap::Rebuild(const ExperiencePoseLookup& lookup) {
-  size_t moved = 0;
+  const RebuildPlan plan = PlanRebuild(lookup);
+  Adopt(Replay(plan), plan);
+  return plan.moved;
+}
+
+AnchoredProfileMap::RebuildPlan AnchoredProfileMap::PlanRebuild(const ExperiencePoseLookup& lookup) {
+  RebuildPlan plan{grid_.grid_config(), grid_.sensor_config(), {}, 0};
+  plan.placements.reserve(profiles_.size());
   for (AnchoredProfile& p : profiles_) {
     if (const std::optional<Pose2D> pose = lookup(p.experience_id); pose && IsFinite(*pose)) {
       if (pose->x != p.experience_pose.x || pose->y != p.experience_pose.y ||
           pose->theta != p.experience_pose.theta)
-        ++moved;
+        ++plan.moved;
       p.experience_pose = *pose;
     }
+    plan.placements.emplace_back(Compose(p.experience_pose, p.offset), &p.profile);
   }
-  grid_.Clear();
-  for (const AnchoredProfile& p : profiles_) grid_.InsertProfile(p.profile, Compose(p.experience_pose, p.offset));
-  return moved;
+  return plan;
+}
+
+OccupancyGrid AnchoredProfileMap::Replay(const RebuildPlan& plan) {
+  OccupancyGrid grid(plan.grid, plan.sensor);
+  for (const auto& [pose, profile] : plan.placements) grid.InsertProfile(*profile, pose);
+  return grid;
+}
+
+void AnchoredProfileMap::Adopt(OccupancyGrid grid, const RebuildPlan& plan) {
+  for (size_t i = plan.placements.size(); i < profiles_.size(); ++i)
+    grid.InsertProfile(profiles_[i].profile, Compose(profiles_[i].experience_pose, profiles_[i].offset));
+  grid_ = std::move(grid);
 }
 
 proto::OccupancyState AnchoredProfileMap::ToProto() const {
@@ -104,8 +122,7 @@ AnchoredProfileMap AnchoredProfileMap::FromProto(const proto::OccupancyState& st
   } catch (const std::exception& e) {
     throw std::invalid_argument(std::string("occupancy state has bad grid parameters: ") + e.what());
   }
-  std::vector<AnchoredProfile> profiles;
-  profiles.reserve(state.profiles_size());
+  std::deque<AnchoredProfile> profiles;
   for (int i = 0; i < state.profiles_size(); ++i) {
     const auto& in = state.profiles(i);
     const std::string where = "occupancy state profile " + std::to_string(i) + ": ";

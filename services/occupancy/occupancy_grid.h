@@ -88,6 +88,8 @@ class OccupancyGrid {
   OccupancyGrid(GridConfig grid, SensorModelConfig sensor);
   OccupancyGrid(const OccupancyGrid&) = default;
   OccupancyGrid& operator=(const OccupancyGrid&) = default;
+  OccupancyGrid(OccupancyGrid&&) = default;
+  OccupancyGrid& operator=(OccupancyGrid&&) = default;
 
   // Inserts a profile taken at robot_pose (world frame). Returns the number of cell updates made.
   // Throws std::invalid_argument for a non-finite pose or a malformed profile.

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <thread>
 
 namespace rslam::occupancy {
 namespace {
@@ -89,6 +90,38 @@ TEST(AnchoredProfileMapTest, SavedStateLoadsIntoTheSameGrid) {
   EXPECT_DOUBLE_EQ(loaded.profiles()[1].experience_pose.theta, 1.1);
   EXPECT_EQ(loaded.grid().ToRosCells(), map.grid().ToRosCells());
   EXPECT_EQ(loaded.grid().grid_config().width, 200);
+}
+
+TEST(AnchoredProfileMapTest, AReplayOnAnotherThreadWhileProfilesKeepComingGivesTheRebuiltGrid) {
+  // The occupancy node's rebuild: plan, replay on another thread while new profiles are added,
+  // adopt. It must give the grid of a rebuild made with every profile at once.
+  auto fill = [](AnchoredProfileMap& map, int first, int count) {
+    for (int i = first; i < first + count; ++i) {
+      const Pose2D experience{0.05 * i, 0.02 * (i % 5), 0.1 * i};
+      map.AddProfile(static_cast<uint64_t>(i % 4), experience, Compose(experience, {0.1, 0.0, 0.3}), ObstacleAhead());
+    }
+  };
+  const auto corrected = [](uint64_t id) -> std::optional<Pose2D> {
+    if (id == 3) return std::nullopt;  // an experience the correction does not know keeps its pose
+    return Pose2D{-0.3 * static_cast<double>(id), 0.2, 0.5 * static_cast<double>(id)};
+  };
+  AnchoredProfileMap at_once(Grid(), Model()), threaded(Grid(), Model());
+  fill(at_once, 0, 40);
+  fill(threaded, 0, 40);
+  const size_t moved = at_once.Rebuild(corrected);
+  fill(at_once, 40, 40);
+
+  const AnchoredProfileMap::RebuildPlan plan = threaded.PlanRebuild(corrected);
+  EXPECT_EQ(plan.moved, moved);
+  EXPECT_EQ(plan.placements.size(), 40u);
+  std::optional<OccupancyGrid> replayed;
+  std::thread replay([&] { replayed.emplace(AnchoredProfileMap::Replay(plan)); });
+  fill(threaded, 40, 40);  // profiles kept meanwhile go into the live grid, then into the new one
+  replay.join();
+  const std::vector<int8_t> live = threaded.grid().ToRosCells();
+  threaded.Adopt(std::move(*replayed), plan);
+  EXPECT_EQ(threaded.grid().ToRosCells(), at_once.grid().ToRosCells());
+  EXPECT_NE(live, at_once.grid().ToRosCells()) << "the live grid kept the old anchors until the adopt";
 }
 
 TEST(AnchoredProfileMapTest, RefusesCorruptStateWhole) {
