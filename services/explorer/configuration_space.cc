@@ -8,6 +8,7 @@ namespace rslam::explorer {
 CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConfig& config) {
   occupancy.Validate();
   const int w = occupancy.width, h = occupancy.height;
+  // unknown: 1 for a cell never seen, 2 for an uncertain one.
   cv::Mat occupied(h, w, CV_8U), unknown(h, w, CV_8U);
   for (int y = 0; y < h; ++y) {
     uchar* occ = occupied.ptr<uchar>(y);
@@ -16,7 +17,7 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
     for (int x = 0; x < w; ++x) {
       const CellClass c = occupancy.Classify(row[x]);
       occ[x] = c == CellClass::kOccupied ? 1 : 0;
-      unk[x] = c == CellClass::kUnknown ? 1 : 0;
+      unk[x] = c == CellClass::kUnknown ? 1 : (c == CellClass::kUncertain ? 2 : 0);
     }
   }
   // One extra cell absorbs quantisation: any point of a free cell is then at least the robot radius
@@ -41,7 +42,7 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
   // Cells past the map edge count as occupied: the robot never plans to leave the map.
   for (int cy = 0; cy < grid.height; ++cy) {
     for (int cx = 0; cx < grid.width; ++cx) {
-      int occ = 0, unk = 0, raw = 0;
+      int occ = 0, unseen = 0, uncertain = 0, raw = 0;
       for (int y = cy * f; y < cy * f + f; ++y) {
         if (y >= h) { occ += f; raw += f; continue; }
         const uchar* o = occupied.ptr<uchar>(y);
@@ -51,14 +52,17 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
           if (x >= w) { ++occ; ++raw; continue; }
           occ += o[x];
           raw += r[x];
-          unk += u[x];
+          unseen += u[x] == 1;
+          uncertain += u[x] == 2;
         }
       }
       grid.obstacle[static_cast<size_t>(cy) * grid.width + cx] = raw > 0;
-      grid.unseen[static_cast<size_t>(cy) * grid.width + cx] = unk > 0;
-      grid.cells[static_cast<size_t>(cy) * grid.width + cx] =
-          occ > 0 ? CellClass::kOccupied
-                  : (unk >= config.min_unknown_cells_for_goal ? CellClass::kUnknown : CellClass::kFree);
+      const int goal_cells = config.uncertain_cells_are_goals ? unseen + uncertain : unseen;
+      CellClass& cell = grid.cells[static_cast<size_t>(cy) * grid.width + cx];
+      if (occ > 0) cell = CellClass::kOccupied;
+      else if (goal_cells >= config.min_unknown_cells_for_goal) cell = CellClass::kUnknown;
+      else if (unseen + uncertain >= config.min_unknown_cells_for_goal) cell = CellClass::kUncertain;
+      grid.unseen[static_cast<size_t>(cy) * grid.width + cx] = unseen + uncertain > 0;
     }
   }
   return grid;

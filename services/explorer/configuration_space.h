@@ -2,7 +2,9 @@
 // Configuration space on the coarse exploration grid (paper 003 section 4, Fig. 5): occupied
 // cells of the occupancy grid are dilated by the robot radius, then each coarse cell (a block of
 // factor x factor occupancy cells) is occupied if any of its cells is (dilated) occupied, unknown
-// if at least min_unknown of its cells are unknown, and free otherwise. A coarse cell bigger than
+// (a goal) if at least min_unknown of its cells are unknown (with uncertain_cells_are_goals:
+// unknown or uncertain), uncertain if it is no goal only because its uncertain cells do not count,
+// and free otherwise; only free cells are driven through. A coarse cell bigger than
 // the occupancy cell keeps paths away from walls ("too close" paths, Zelinsky) and cuts the
 // number of moves.
 
@@ -24,7 +26,7 @@ struct CoarseGrid {
   // 1 where the block itself holds an occupied occupancy cell (or lies past the map edge): the
   // cells a robot that finds itself inside the dilation margin must not cross to get out.
   std::vector<uint8_t> obstacle;
-  // 1 where the block holds an unknown occupancy cell (whatever its class).
+  // 1 where the block holds an unknown or uncertain occupancy cell (whatever its class).
   std::vector<uint8_t> unseen;
 
   CellClass At(int x, int y) const { return cells[static_cast<size_t>(y) * width + x]; }

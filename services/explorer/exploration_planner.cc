@@ -59,7 +59,9 @@ std::vector<std::pair<int, int>> EscapePath(const CoarseGrid& cs, const std::vec
       const int nx = x + kNeighbourDx[k], ny = y + kNeighbourDy[k];
       if (!cs.Contains(nx, ny)) continue;
       const size_t j = static_cast<size_t>(ny) * w + nx;
-      if (parent[j] >= 0 || cs.obstacle[j] || near_blocking[j] || cs.cells[j] == CellClass::kUnknown) continue;
+      if (parent[j] >= 0 || cs.obstacle[j] || near_blocking[j] || cs.cells[j] == CellClass::kUnknown ||
+          cs.cells[j] == CellClass::kUncertain)
+        continue;
       parent[j] = static_cast<int32_t>(i);
       depth[j] = depth[i] + 1;
       queue.push_back(j);

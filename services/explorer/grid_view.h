@@ -1,7 +1,8 @@
 #pragma once
 // What the explorer reads: a borrowed occupancy grid in the ROS nav_msgs/OccupancyGrid convention
 // (-1 unknown, 0..100 percent occupied, row-major from the lower-left cell at origin), plus the
-// thresholds that classify a cell, and the robot pose type.
+// thresholds that classify a cell, and the robot pose type. A cell seen but between the
+// thresholds is uncertain: a wall seen once, or a cell a map correction keeps moving a wall across.
 
 #include <cmath>
 #include <cstdint>
@@ -16,7 +17,9 @@ struct Pose2D {
   double theta = 0.0;
 };
 
-enum class CellClass : uint8_t { kFree = 0, kOccupied = 1, kUnknown = 2 };
+// kUncertain: seen, neither free nor occupied enough (a coarse cell: one that holds such cells and
+// is not a goal, see ExplorerConfig::uncertain_cells_are_goals).
+enum class CellClass : uint8_t { kFree = 0, kOccupied = 1, kUnknown = 2, kUncertain = 3 };
 
 struct GridView {
   int width = 0;
@@ -26,13 +29,13 @@ struct GridView {
   double origin_y_m = 0.0;
   std::span<const int8_t> cells;
   int free_max_percent = 19;      // 0..free_max is free (map_server free_thresh 0.196)
-  int occupied_min_percent = 65;  // occupied_min..100 is occupied; between is unknown
+  int occupied_min_percent = 65;  // occupied_min..100 is occupied; between is uncertain
 
   CellClass Classify(int8_t v) const {
     if (v < 0) return CellClass::kUnknown;
     if (v >= occupied_min_percent) return CellClass::kOccupied;
     if (v <= free_max_percent) return CellClass::kFree;
-    return CellClass::kUnknown;
+    return CellClass::kUncertain;
   }
   CellClass ClassAt(int x, int y) const { return Classify(cells[static_cast<size_t>(y) * width + x]); }
 

@@ -39,6 +39,30 @@ TEST(ConfigurationSpaceTest, UnknownCellsMakeGoalsButObstaclesWin) {
   EXPECT_EQ(cs.At(0, 1), CellClass::kFree);
 }
 
+TEST(ConfigurationSpaceTest, UncertainCellsMakeNoGoalWhenToldNotTo) {
+  std::vector<int8_t> cells(8 * 8, 0);
+  cells[3 * 8 + 7] = 50;  // coarse (1, 0): uncertain only
+  cells[0] = -1;          // coarse (0, 0): never seen,
+  cells[1] = 50;          // and uncertain
+  GridView view{8, 8, 0.1, 0.0, 0.0, cells};
+  ExplorerConfig config;
+  config.robot_radius_m = 0.0;
+  config.coarse_cell_factor = 4;
+  config.uncertain_cells_are_goals = false;
+  const CoarseGrid cs = BuildConfigurationSpace(view, config);
+  EXPECT_EQ(cs.At(1, 0), CellClass::kUncertain);
+  EXPECT_EQ(cs.At(0, 0), CellClass::kUnknown);
+  EXPECT_EQ(cs.At(0, 1), CellClass::kFree);
+  EXPECT_TRUE(cs.unseen[1]);
+  // Below min_unknown_cells_for_goal a block is free, whatever its unknown cells are.
+  config.min_unknown_cells_for_goal = 2;
+  const CoarseGrid two = BuildConfigurationSpace(view, config);
+  EXPECT_EQ(two.At(1, 0), CellClass::kFree);
+  EXPECT_EQ(two.At(0, 0), CellClass::kUncertain) << "a goal only if both cells counted";
+  config.uncertain_cells_are_goals = true;
+  EXPECT_EQ(BuildConfigurationSpace(view, config).At(0, 0), CellClass::kUnknown);
+}
+
 TEST(ConfigurationSpaceTest, RejectsAnInconsistentView) {
   std::vector<int8_t> cells(10, 0);
   EXPECT_THROW(BuildConfigurationSpace(GridView{4, 4, 0.1, 0, 0, cells}, ExplorerConfig{}), std::invalid_argument);

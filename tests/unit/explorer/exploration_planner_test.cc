@@ -50,6 +50,26 @@ TEST(ExplorationPlannerTest, KnownClosedRoomIsComplete) {
   EXPECT_EQ(plan.commands[0].kind, Kind::kStop);
 }
 
+TEST(ExplorationPlannerTest, UncertainCellsAreGoalsOnlyWhenConfiguredSo) {
+  // A known room with a patch of cells seen both free and occupied (a wall a correction moved).
+  TestGrid grid(40, 40, 0);
+  for (int y = 20; y < 24; ++y)
+    for (int x = 20; x < 24; ++x) grid.Set(x, y, 60);
+  ExplorationPlanner goals(Config());
+  const Plan to_patch = goals.PlanFrom(grid.View(), {0.5, 0.5, 0.0});
+  EXPECT_FALSE(to_patch.complete);
+  EXPECT_EQ(to_patch.goal_x, 10) << to_patch.reason;
+  ExplorerConfig config = Config();
+  config.uncertain_cells_are_goals = false;
+  ExplorationPlanner no_goals(config);
+  const Plan done = no_goals.PlanFrom(grid.View(), {0.5, 0.5, 0.0});
+  EXPECT_TRUE(done.complete) << done.reason;
+  grid.Set(30, 30, -1);  // a cell never seen still is a goal
+  const Plan to_unseen = no_goals.PlanFrom(grid.View(), {0.5, 0.5, 0.0});
+  EXPECT_FALSE(to_unseen.complete);
+  EXPECT_EQ(to_unseen.goal_x, 15) << to_unseen.reason;
+}
+
 TEST(ExplorationPlannerTest, UnknownSpaceBehindAClosedWallIsNotAGoal) {
   TestGrid grid(40, 40, 0);
   for (int y = 0; y < 40; ++y) grid.Set(25, y, 100);
