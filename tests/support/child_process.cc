@@ -87,6 +87,7 @@ ChildProcess::ChildProcess(const std::string& binary, const std::vector<std::str
     sigset_t none;
     sigemptyset(&none);
     ::sigprocmask(SIG_SETMASK, &none, nullptr);
+    if (options_.own_process_group) ::setpgid(0, 0);
     ::dup2(log_fd, STDOUT_FILENO);
     ::dup2(log_fd, STDERR_FILENO);
     const int null_fd = ::open("/dev/null", O_RDONLY);
@@ -98,6 +99,8 @@ ChildProcess::ChildProcess(const std::string& binary, const std::vector<std::str
     (void)!::write(STDERR_FILENO, "\n", 1);
     ::_exit(127);
   }
+  // Also from this side, so a signal sent right away already reaches the group.
+  if (options_.own_process_group) ::setpgid(pid_, pid_);
   ::close(log_fd);
 }
 
@@ -120,8 +123,10 @@ bool ChildProcess::Running() {
   return true;
 }
 
+void ChildProcess::Kill(int signal_number) const { ::kill(options_.own_process_group ? -pid_ : pid_, signal_number); }
+
 void ChildProcess::Signal(int signal_number) {
-  if (Running()) ::kill(pid_, signal_number);
+  if (Running()) Kill(signal_number);
 }
 
 int ChildProcess::ExitCodeOf(int status) const {
@@ -138,7 +143,7 @@ std::optional<int> ChildProcess::WaitExit(std::chrono::milliseconds timeout) {
 int ChildProcess::Stop(std::chrono::milliseconds grace) {
   Signal(SIGTERM);
   if (const auto code = WaitExit(grace)) return *code;
-  ::kill(pid_, SIGKILL);
+  Kill(SIGKILL);
   int status = 0;
   if (::waitpid(pid_, &status, 0) == pid_) status_ = status;
   return status_ ? ExitCodeOf(*status_) : -1;

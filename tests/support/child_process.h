@@ -47,6 +47,9 @@ class ChildProcess {
     std::map<std::string, std::string> environment;  // added to (or replacing) the test's own
     std::string log_file;                              // "" = a temporary file removed at the end
     std::chrono::milliseconds stop_grace{5000};        // SIGTERM -> SIGKILL in the destructor
+    // The child leads its own process group and Signal/Stop reach the whole group: for a
+    // launcher (`rslam demo`), so the processes it started end with it even if it is killed.
+    bool own_process_group = false;
   };
 
   // Starts binary with args (argv[0] = binary). Throws std::runtime_error when fork fails; an
@@ -60,7 +63,7 @@ class ChildProcess {
   pid_t pid() const { return pid_; }
   const std::string& name() const { return name_; }
   bool Running();
-  void Signal(int signal_number);
+  void Signal(int signal_number);  // to the child (its group with own_process_group) while it runs
 
   // The exit code (128 + signal number when killed by a signal), or nothing while it still runs
   // at the timeout.
@@ -77,6 +80,7 @@ class ChildProcess {
 
  private:
   int ExitCodeOf(int status) const;
+  void Kill(int signal_number) const;  // to the child, or its group
 
   std::string name_;
   Options options_;

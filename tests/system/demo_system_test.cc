@@ -2,9 +2,6 @@
 // test's own domain for about a minute; the results folder must hold every file and a
 // summary.json whose figures are present and sane.
 
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -14,11 +11,11 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
+#include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "tests/support/child_process.h"
 #include "tests/support/test_domain.h"
 
 namespace rslam {
@@ -26,50 +23,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
-
-// Runs a command to completion with its output in a file; kills it (and its process group, the
-// services it started) if it outlives the timeout or the test.
-struct CommandResult {
-  int exit_code = -1;
-  std::string output;
-};
-
-CommandResult RunCommand(const std::vector<std::string>& command, const fs::path& log, std::chrono::seconds timeout) {
-  std::vector<std::string> storage = command;
-  std::vector<char*> argv;
-  for (auto& a : storage) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    ::setpgid(0, 0);
-    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd >= 0) {
-      ::dup2(fd, 1);
-      ::dup2(fd, 2);
-    }
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  CommandResult result;
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  int status = 0;
-  while (::waitpid(pid, &status, WNOHANG) != pid) {
-    if (std::chrono::steady_clock::now() >= deadline) {
-      ::kill(-pid, SIGKILL);
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, &status, 0);
-      status = -1;
-      break;
-    }
-    std::this_thread::sleep_for(100ms);
-  }
-  if (status != -1 && WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
-  std::ifstream in(log);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  result.output = ss.str();
-  return result;
-}
 
 // `rslam demo` when the command line has it, else the standalone driver.
 std::vector<std::string> DemoCommand() {
@@ -88,11 +41,15 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   const fs::path out = pattern;
   std::vector<std::string> command = DemoCommand();
   command.insert(command.end(), {"--out", out.string(), "--max-seconds", "60", "--domain", std::to_string(domain.id())});
-  const CommandResult run = RunCommand(command, out / "demo-output.txt", 240s);
-  ASSERT_EQ(run.exit_code, 0) << run.output;
+  testing::ChildProcess::Options options;
+  options.log_file = (out / "demo-output.txt").string();
+  options.own_process_group = true;  // a demo that outlives the test takes its services with it
+  testing::ChildProcess demo(command[0], {command.begin() + 1, command.end()}, options);
+  ASSERT_EQ(demo.WaitExit(240s), std::optional<int>(0)) << demo.Tail();
+  const std::string output = demo.Output();
 
   for (const char* file : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid.pgm", "grid.yaml"})
-    EXPECT_TRUE(fs::exists(out / file) && fs::file_size(out / file) > 0) << file << "\n" << run.output;
+    EXPECT_TRUE(fs::exists(out / file) && fs::file_size(out / file) > 0) << file << "\n" << output;
   std::ifstream in(out / "summary.json");
   ASSERT_TRUE(in.good());
   const nlohmann::json summary = nlohmann::json::parse(in);
@@ -128,7 +85,9 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   ASSERT_TRUE(summary["ate_odometry_m"].is_number());
   EXPECT_GE(summary["ate_odometry_m"].get<double>(), 0.0);
   EXPECT_GT(summary["wall_s"].get<double>(), 0.0);
-  if (!summary["recording"].is_null()) EXPECT_TRUE(fs::exists(summary["recording"].get<std::string>()));
+  if (!summary["recording"].is_null()) {
+    EXPECT_TRUE(fs::exists(summary["recording"].get<std::string>()));
+  }
   for (const auto& [name, process] : summary["processes"].items())
     EXPECT_FALSE(process["gave_up"].get<bool>()) << name << " gave up";
   std::error_code ignored;
