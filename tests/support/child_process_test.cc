@@ -6,7 +6,9 @@
 
 #include <chrono>
 #include <fstream>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace rslam::testing {
 namespace {
@@ -24,9 +26,9 @@ bool Alive(pid_t pid) {
 pid_t StartShellWithSleep(const ScratchFolder& dir, bool own_process_group, std::unique_ptr<ChildProcess>& shell) {
   ChildProcess::Options options;
   options.own_process_group = own_process_group;
-  shell = std::make_unique<ChildProcess>(
-      "/bin/sh", std::vector<std::string>{"-c", "sleep 60 & echo $! > " + dir / "pid.tmp" + "; mv " + dir / "pid.tmp" + " " + dir / "pid" + "; wait"},
-      options);
+  const std::string script =
+      "sleep 60 & echo $! > " + dir / "pid.tmp" + "; mv " + dir / "pid.tmp" + " " + dir / "pid" + "; wait";
+  shell = std::make_unique<ChildProcess>("/bin/sh", std::vector<std::string>{"-c", script}, options);
   pid_t pid = 0;
   EXPECT_TRUE(WaitFor([&] { return bool(std::ifstream(dir / "pid") >> pid); }, 10s)) << shell->Output();
   return pid;

@@ -94,7 +94,8 @@ AnchoredProfileMap DemoSizedMap(int n) {
   frame.first_bearing_rad = -0.6;
   frame.bin_width_rad = 1.2 / 70;
   for (int i = 0; i < 70; ++i)
-    frame.bins.push_back(RopBin{static_cast<float>(1.0 + 0.5 * (1 + std::sin(i * 0.2))), 0.35f, BinStatus::kObstacle});
+    frame.bins.push_back(
+        RopBin{static_cast<float>(1.0 + 0.5 * (1 + std::sin(i * 0.2))), 0.35f, BinStatus::kObstacle});
   for (int i = 0; i < n; ++i) {
     const Pose2D experience{std::fmod(i * 0.37, 10.0), std::fmod(i * 0.53, 8.0), i * 0.1};
     map.AddProfile({static_cast<uint64_t>(i % 100), {0.05 * (i % 7), 0.0, 0.3 * (i % 11)}, experience, frame});
