@@ -181,7 +181,7 @@ class OccupancyNode::Mapper {
   // in the lockstep demo every frame waits for occupancy/profile, and replaying every profile on
   // the frame's thread held the whole pipeline for 136 ms at 20,000 profiles.
   void ApplyPendingCorrection() {
-    if (!pending_correction_ || planned_rebuild_ || rebuilding_) return;
+    if (!pending_correction_ || planned_rebuild_) return;
     const PendingCorrection correction = std::move(*pending_correction_);
     pending_correction_.reset();
     rebuilt_version_ = correction.map_version;
@@ -204,20 +204,20 @@ class OccupancyNode::Mapper {
     for (;;) {
       rebuild_wake_.wait(lock, [this] { return planned_rebuild_ || stop_rebuilds_; });
       if (!planned_rebuild_) return;  // stopping, nothing planned
-      const PlannedRebuild job = std::move(*planned_rebuild_);
-      planned_rebuild_.reset();
-      rebuilding_ = true;
+      // Nothing else writes the plan while it is set (ApplyPendingCorrection waits for the reset).
+      const PlannedRebuild& job = *planned_rebuild_;
       lock.unlock();
       OccupancyGrid grid = AnchoredProfileMap::Replay(job.plan);
       lock.lock();
-      rebuilding_ = false;
       map_.Adopt(std::move(grid), job.plan);
-      latest_map_version_ = std::max(latest_map_version_, job.map_version);
+      const uint64_t version = job.map_version;
+      latest_map_version_ = std::max(latest_map_version_, version);
       dirty_ = true;
-      spdlog::info("map version {}: rebuilt the grid ({} of {} profiles moved)", job.map_version, job.plan.moved,
+      spdlog::info("map version {}: rebuilt the grid ({} of {} profiles moved)", version, job.plan.moved,
                    job.plan.placements.size());
+      planned_rebuild_.reset();
       if (stopped_) continue;  // a plan made before the stop still finishes, for the saved and exported grid
-      PublishGrid(last_header_, job.map_version);
+      PublishGrid(last_header_, version);
       if (frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames) ApplyPendingCorrection();
     }
   }
@@ -360,8 +360,7 @@ class OccupancyNode::Mapper {
     AnchoredProfileMap::RebuildPlan plan;
     uint64_t map_version = 0;
   };
-  std::optional<PlannedRebuild> planned_rebuild_;  // for the rebuild thread to replay
-  bool rebuilding_ = false;                        // the rebuild thread is replaying
+  std::optional<PlannedRebuild> planned_rebuild_;  // set from the plan until the rebuild thread adopts it
   bool stop_rebuilds_ = false;
   std::condition_variable rebuild_wake_;
   std::thread rebuild_thread_;  // started by the first rebuild, joined by StopRebuilds

@@ -32,7 +32,8 @@ struct BoundaryScan {
 
   // Normals from each point's bearing neighbours closer than neighbour_max_distance_m; a lone
   // point gets the viewing ray as normal (point-to-point along the ray).
-  static BoundaryScan FromPoints(std::vector<Eigen::Vector2d> points, double neighbour_max_distance_m = kBoundaryNeighbourMaxDistanceM);
+  static BoundaryScan FromPoints(std::vector<Eigen::Vector2d> points,
+                                 double neighbour_max_distance_m = kBoundaryNeighbourMaxDistanceM);
 };
 
 struct AlignmentOptions {
