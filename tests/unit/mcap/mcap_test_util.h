@@ -2,7 +2,6 @@
 // Shared by the MCAP tests: a scratch directory per test and a deterministic message stream.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -14,16 +13,20 @@
 
 #include "common/mcap/mcap_reader.h"
 #include "common/mcap/mcap_writer.h"
+#include "tests/support/child_process.h"
 
 namespace rslam::mcap::testing {
 
+// A folder of its own for the running test, inside one folder per test process that is removed
+// with everything in it when the process ends.
 inline std::filesystem::path ScratchDir() {
+  static const ::rslam::testing::ScratchFolder process_folder("rslam-mcap-test");
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   std::string name = std::string(info->test_suite_name()) + "_" + info->name();
   for (char& c : name) {
     if (c == '/') c = '_';
   }
-  const auto dir = std::filesystem::temp_directory_path() / ("rslam_mcap_test_" + std::to_string(::getpid())) / name;
+  const auto dir = process_folder.path() / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
