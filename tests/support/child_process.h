@@ -8,7 +8,8 @@
 //   ...
 //   EXPECT_EQ(odometry.Stop(), 0) << odometry.Output();   // SIGTERM, clean exit code 0
 //
-// Also: WaitFor (poll a condition with a deadline) and ScratchFolder (a temporary folder).
+// Also: WaitFor (poll a condition with a deadline), ScratchFolder (a temporary folder) and
+// ScratchFolderForTest (an empty folder for the running GoogleTest test).
 
 #include <sys/types.h>
 
@@ -40,6 +41,10 @@ class ScratchFolder {
  private:
   std::filesystem::path path_;
 };
+
+// An empty folder named after the running GoogleTest test, inside one ScratchFolder per test
+// process, which is removed with everything in it when the process ends.
+std::filesystem::path ScratchFolderForTest();
 
 class ChildProcess {
  public:

@@ -35,19 +35,7 @@ using namespace std::chrono_literals;
 using rslam::testing::ChildProcess;
 namespace fs = std::filesystem;
 
-// A folder of its own for the running test, inside one folder per test process that is removed
-// with everything in it when the process ends.
-inline fs::path ScratchDir() {
-  static const rslam::testing::ScratchFolder process_folder("rslam-record-test");
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = std::string(info->test_suite_name()) + "_" + info->name();
-  for (char& c : name)
-    if (c == '/') c = '_';
-  const auto dir = process_folder.path() / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+inline fs::path ScratchDir() { return rslam::testing::ScratchFolderForTest(); }
 
 
 // build/bin/rslam once it has the record commands, else the test-only CLI.

@@ -17,20 +17,7 @@
 
 namespace rslam::mcap::testing {
 
-// A folder of its own for the running test, inside one folder per test process that is removed
-// with everything in it when the process ends.
-inline std::filesystem::path ScratchDir() {
-  static const ::rslam::testing::ScratchFolder process_folder("rslam-mcap-test");
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  std::string name = std::string(info->test_suite_name()) + "_" + info->name();
-  for (char& c : name) {
-    if (c == '/') c = '_';
-  }
-  const auto dir = process_folder.path() / name;
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
+inline std::filesystem::path ScratchDir() { return ::rslam::testing::ScratchFolderForTest(); }
 
 struct WrittenMessage {
   uint16_t channel;

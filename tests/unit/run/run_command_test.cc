@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "synthetic_loop.h"
+#include "tests/support/child_process.h"
 
 namespace rslam::run {
 namespace {
@@ -26,21 +27,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::SyntheticLoop;
 
-class TempDir {
- public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "rslam_run_test_XXXXXX").string();
-    path_ = ::mkdtemp(pattern.data());
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using TempDir = ::rslam::testing::ScratchFolder;
 
 std::string ReadFile(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
