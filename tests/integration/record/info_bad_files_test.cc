@@ -49,7 +49,7 @@ void ExpectRefused(const std::string& path, const fs::path& log, const std::stri
 }
 
 TEST(InfoBadFiles, GoodRecordingIsDescribed) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string good = WriteGoodRecording(dir);
   const CliResult r = RunCli({"info", good, "--json"}, dir / "info.log");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -63,7 +63,7 @@ TEST(InfoBadFiles, GoodRecordingIsDescribed) {
 }
 
 TEST(InfoBadFiles, TruncatedFileIsRefused) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const auto bytes = ReadBytes(WriteGoodRecording(dir));
   for (std::size_t keep : {bytes.size() - 1, bytes.size() / 2, std::size_t{20}, std::size_t{0}}) {
     const std::string path = (dir / ("cut_" + std::to_string(keep) + ".mcap")).string();
@@ -73,7 +73,7 @@ TEST(InfoBadFiles, TruncatedFileIsRefused) {
 }
 
 TEST(InfoBadFiles, WrongMagicIsRefused) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   auto bytes = ReadBytes(WriteGoodRecording(dir));
   auto head = bytes;
   head[1] = 'X';
@@ -86,7 +86,7 @@ TEST(InfoBadFiles, WrongMagicIsRefused) {
 }
 
 TEST(InfoBadFiles, FlippedPayloadByteFailsTheCrc) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   auto bytes = ReadBytes(WriteGoodRecording(dir));
   // Inside the first chunk's records (after magic 8 + header record and the chunk's fields).
   bytes[400] = static_cast<char>(bytes[400] ^ 0x5A);
@@ -95,7 +95,7 @@ TEST(InfoBadFiles, FlippedPayloadByteFailsTheCrc) {
 }
 
 TEST(InfoBadFiles, WrongRecordLengthIsRefused) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   auto bytes = ReadBytes(WriteGoodRecording(dir));
   // The Header record's length field (right after the magic and its opcode): too long, too short.
   for (uint64_t length : {uint64_t{1} << 40, uint64_t{3}}) {
@@ -108,7 +108,7 @@ TEST(InfoBadFiles, WrongRecordLengthIsRefused) {
 }
 
 TEST(InfoBadFiles, MissingFileIsAnError) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const CliResult r = RunCli({"info", (dir / "absent.mcap").string()}, dir / "info.log");
   EXPECT_NE(r.code, 0);
 }

@@ -77,7 +77,7 @@ class RecordFiles : public ::testing::Test {
 class RecordCompression : public RecordFiles, public ::testing::WithParamInterface<std::string> {};
 
 TEST_P(RecordCompression, EveryMessageReadsBackInEachCompressionMode) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   RecorderOptions o;
   o.file.path = (dir / "c.mcap").string();
   o.file.compression = GetParam();
@@ -99,7 +99,7 @@ INSTANTIATE_TEST_SUITE_P(Modes, RecordCompression, ::testing::Values("zstd", "lz
                          [](const auto& info) { return info.param; });
 
 TEST_F(RecordFiles, SplitBySizeKeepsEveryMessageAcrossFiles) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   RecorderOptions o;
   o.file.path = (dir / "split.mcap").string();
   o.file.split_bytes = 2'000'000;
@@ -119,7 +119,7 @@ TEST_F(RecordFiles, SplitBySizeKeepsEveryMessageAcrossFiles) {
 }
 
 TEST_F(RecordFiles, SplitByDurationKeepsEveryMessageAcrossFiles) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   RecorderOptions o;
   o.file.path = (dir / "timed.mcap").string();
   o.file.split_duration_ns = 200'000'000;
@@ -139,7 +139,7 @@ TEST_F(RecordFiles, SplitByDurationKeepsEveryMessageAcrossFiles) {
 }
 
 TEST_F(RecordFiles, FastDdsRecorderRecordsCyclonePublishers) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   RecorderOptions o;
   o.file.path = (dir / "interop.mcap").string();
   StartRecorder(o, bus::Vendor::kFastDds);
@@ -154,7 +154,7 @@ TEST_F(RecordFiles, FastDdsRecorderRecordsCyclonePublishers) {
 
 TEST(RecordRobots, RobotOptionRecordsOnlyThoseRobotsPartitions) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   RecorderOptions o;
   o.file.path = (dir / "robot2.mcap").string();
   o.topics_regex = "^odometry/velocity$";

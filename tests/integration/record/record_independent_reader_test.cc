@@ -110,7 +110,7 @@ TEST(IndependentReader, FoxgloveDecodesEveryRecordedMessageAsPublished) {
   if (!HaveCommand("node") || !HaveCommand("npm")) GTEST_SKIP() << "node/npm not installed";
   const std::string modules = NodeModulesDir();
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   RecorderOptions options;
   options.file.path = (dir / "typed.mcap").string();
   options.topics_regex = "^(camera/image|odometry/velocity|pose_cells/action|experience_map/map)$";

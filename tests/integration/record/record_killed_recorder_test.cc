@@ -55,7 +55,7 @@ uint64_t MessagesInCompleteChunks(const std::string& path) {
 
 TEST(KilledRecorder, RecoverKeepsEveryMessageOfTheCompleteChunks) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string file = (dir / "killed.mcap").string();
   const std::string repaired = (dir / "repaired.mcap").string();
   ChildProcess recorder(Cli(), {"record", "-o", file, "--domain", std::to_string(domain.id()), "--topics",

@@ -42,7 +42,7 @@ void Send(Stream& s, const T& msg) {
 
 TEST(RecordPlayRoundTrip, TwoRobotsRecordedCountedAndPlayedBackByteIdenticalInOrder) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string file = (dir / "run.mcap").string();
   const std::string d = std::to_string(domain.id());
   ChildProcess recorder(Cli(), {"record", "-o", file, "--domain", d, "--topics",
@@ -177,7 +177,7 @@ std::map<ChannelKey, std::vector<std::vector<uint8_t>>> WriteTwoRobotRecording(c
 
 TEST(RecordPlayRoundTrip, RobotRemapPublishesInTheNewPartitionWithTheHeaderRewritten) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string file = (dir / "two.mcap").string();
   const auto sent = WriteTwoRobotRecording(file);
   auto tester = MakeParticipant(domain.id(), "tester");
@@ -212,7 +212,7 @@ TEST(RecordPlayRoundTrip, RobotRemapPublishesInTheNewPartitionWithTheHeaderRewri
 
 TEST(RecordPlayRoundTrip, TopicsFilterPlaysOnlyMatchingTopics) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string file = (dir / "two.mcap").string();
   const auto sent = WriteTwoRobotRecording(file);
   auto tester = MakeParticipant(domain.id(), "tester");
@@ -233,7 +233,7 @@ TEST(RecordPlayRoundTrip, TopicsFilterPlaysOnlyMatchingTopics) {
 // differs only in comments and layout is the same definition.
 TEST(RecordPlayRoundTrip, ChannelsRecordedWithAnotherDefinitionOfTheirTypeAreSkipped) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string file = (dir / "old.mcap").string();
   const auto& table = TopicTable();
   const auto& image_topic = table[0];
@@ -285,7 +285,7 @@ TEST(RecordPlayRoundTrip, ChannelsRecordedWithAnotherDefinitionOfTheirTypeAreSki
 
 TEST(RecordPlayRoundTrip, FastDdsPlayerDeliversToCycloneSubscribers) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string file = (dir / "two.mcap").string();
   const auto sent = WriteTwoRobotRecording(file);
   auto tester = MakeParticipant(domain.id(), "tester");
@@ -315,7 +315,7 @@ std::vector<uint64_t> FrameSeqs(const std::vector<std::vector<uint8_t>>& cdrs) {
 
 TEST(RecordPlayRoundTrip, StartEndWindowAtRecordedRatePlaysOnlyThatSlice) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string file = (dir / "two.mcap").string();
   WriteTwoRobotRecording(file);  // velocity k at k ms (robot1 even k, robot2 odd), images of i%4==0 at 2(i+1) ms
   auto tester = MakeParticipant(domain.id(), "tester");
@@ -338,7 +338,7 @@ TEST(RecordPlayRoundTrip, StartEndWindowAtRecordedRatePlaysOnlyThatSlice) {
 
 TEST(RecordPlayRoundTrip, LoopRepeatsUntilInterrupted) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string file = (dir / "two.mcap").string();
   const auto sent = WriteTwoRobotRecording(file);
   auto tester = MakeParticipant(domain.id(), "tester");
@@ -358,7 +358,7 @@ TEST(RecordPlayRoundTrip, LoopRepeatsUntilInterrupted) {
 
 TEST(RecordProcess, SigtermFinishesTheFileCleanly) {
   rslam::testing::TestDomain domain;
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string file = (dir / "term.mcap").string();
   ChildProcess recorder(Cli(), {"record", "-o", file, "--domain", std::to_string(domain.id()), "--compression", "lz4"},
                         {.environment = {}, .log_file = (dir / "record.log").string()});
@@ -373,7 +373,7 @@ TEST(RecordProcess, SigtermFinishesTheFileCleanly) {
 TEST(RecordProcess, BadCommandLinesAreRefused) {
   rslam::testing::TestDomain domain;
   const std::string d = std::to_string(domain.id());
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   EXPECT_NE(RunCli({"record", "-o", (dir / "x.mcap").string(), "--topics", "(unclosed", "--domain", d},
                    dir / "a.log").code, 0);
   EXPECT_NE(RunCli({"record", "-o", (dir / "x.mcap").string(), "--compression", "brotli"}, dir / "b.log").code, 0);

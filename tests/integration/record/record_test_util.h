@@ -35,7 +35,7 @@ using namespace std::chrono_literals;
 using rslam::testing::ChildProcess;
 namespace fs = std::filesystem;
 
-inline fs::path ScratchDir() { return rslam::testing::ScratchFolderForTest(); }
+using rslam::testing::ScratchFolderForTest;
 
 
 // build/bin/rslam once it has the record commands, else the test-only CLI.

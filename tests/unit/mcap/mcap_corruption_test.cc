@@ -9,11 +9,11 @@ namespace {
 using testing::DeclareChannels;
 using testing::MakeMessages;
 using testing::ReadFile;
-using testing::ScratchDir;
+using testing::ScratchFolderForTest;
 using testing::WriteAll;
 
 std::vector<std::byte> GoodFile(const std::string& compression) {
-  const auto path = ScratchDir() / "good.mcap";
+  const auto path = ScratchFolderForTest() / "good.mcap";
   McapWriter w;
   McapWriterOptions o;
   o.compression = compression;

@@ -17,7 +17,7 @@ namespace {
 
 using testing::DeclareChannels;
 using testing::MakeMessages;
-using testing::ScratchDir;
+using testing::ScratchFolderForTest;
 using testing::WriteAll;
 
 bool HaveCommand(const std::string& name) {
@@ -69,7 +69,7 @@ class IndependentReader : public ::testing::TestWithParam<std::string> {};
 TEST_P(IndependentReader, OfficialMcapReadersAgreeWithWhatWasWritten) {
   if (!HaveCommand("node") || !HaveCommand("npm")) GTEST_SKIP() << "node/npm not installed";
   const std::string modules = NodeModulesDir();
-  const auto path = ScratchDir() / "indep.mcap";
+  const auto path = ScratchFolderForTest() / "indep.mcap";
   const auto msgs = MakeMessages(400);
   McapWriterOptions o;
   o.compression = GetParam();
@@ -167,7 +167,7 @@ std::vector<std::byte> EncodePing(uint32_t seq, const std::string& text,
 TEST(IndependentReader, DecodesHandEncodedCdrWithTheIdlSchema) {
   if (!HaveCommand("node") || !HaveCommand("npm")) GTEST_SKIP() << "node/npm not installed";
   const std::string modules = NodeModulesDir();
-  const auto path = ScratchDir() / "ping.mcap";
+  const auto path = ScratchFolderForTest() / "ping.mcap";
   struct Ping {
     uint32_t seq;
     std::string text;

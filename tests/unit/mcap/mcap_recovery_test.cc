@@ -17,12 +17,12 @@ using testing::DeclareChannels;
 using testing::MakeMessages;
 using testing::ReadAll;
 using testing::ReadFile;
-using testing::ScratchDir;
+using testing::ScratchFolderForTest;
 using testing::WriteAll;
 using testing::WriteFile;
 
 TEST(McapRecovery, TruncatedInsideAChunkKeepsEveryCompleteChunk) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const auto msgs = MakeMessages(500);
   McapWriterOptions o;
   o.chunk_size = 16 * 1024;
@@ -73,7 +73,7 @@ TEST(McapRecovery, TruncatedInsideAChunkKeepsEveryCompleteChunk) {
 }
 
 TEST(McapRecovery, CompleteFileRecoversUnchanged) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const auto msgs = MakeMessages(100);
   {
     McapWriter w;
@@ -89,7 +89,7 @@ TEST(McapRecovery, CompleteFileRecoversUnchanged) {
 }
 
 TEST(McapRecovery, FlushedChunkSurvivesWithoutClose) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const auto msgs = MakeMessages(20);  // far less than one 4 MiB chunk
   std::vector<std::byte> unfinished;
   {
@@ -109,14 +109,14 @@ TEST(McapRecovery, FlushedChunkSurvivesWithoutClose) {
 }
 
 TEST(McapRecovery, NotAnMcapFileIsRefused) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const std::string junk = "this is not an mcap file at all";
   WriteFile(dir / "junk", std::as_bytes(std::span(junk)));
   EXPECT_THROW(RecoverMcap(dir / "junk", dir / "out.mcap"), McapError);
 }
 
 TEST(McapRecovery, RecorderKilledWithSigkillLosesAtMostTheOpenChunk) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const auto path = dir / "killed.mcap";
   McapWriterOptions o;
   o.chunk_size = 8 * 1024;

@@ -10,7 +10,7 @@ using testing::DeclareChannels;
 using testing::InLogTimeOrder;
 using testing::MakeMessages;
 using testing::ReadAll;
-using testing::ScratchDir;
+using testing::ScratchFolderForTest;
 using testing::WriteAll;
 using testing::WrittenMessage;
 
@@ -30,7 +30,7 @@ void ExpectSameMessages(const std::vector<WrittenMessage>& expected,
 class McapRoundTrip : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(McapRoundTrip, EveryMessageReadsBackByteEqualInLogTimeOrder) {
-  const auto path = ScratchDir() / "rt.mcap";
+  const auto path = ScratchFolderForTest() / "rt.mcap";
   const auto msgs = MakeMessages(600);
   McapWriterOptions options;
   options.compression = GetParam();
@@ -86,7 +86,7 @@ INSTANTIATE_TEST_SUITE_P(Compressions, McapRoundTrip, ::testing::Values("zstd", 
                          });
 
 TEST(McapReader, FiltersByTopicAndInclusiveTimeRange) {
-  const auto path = ScratchDir() / "f.mcap";
+  const auto path = ScratchFolderForTest() / "f.mcap";
   const auto msgs = MakeMessages(300);
   {
     McapWriter w;
@@ -113,7 +113,7 @@ TEST(McapReader, FiltersByTopicAndInclusiveTimeRange) {
 }
 
 TEST(McapWriter, FileWithoutMessagesIsValid) {
-  const auto path = ScratchDir() / "empty.mcap";
+  const auto path = ScratchFolderForTest() / "empty.mcap";
   {
     McapWriter w;
     w.Open(path);
@@ -127,7 +127,7 @@ TEST(McapWriter, FileWithoutMessagesIsValid) {
 }
 
 TEST(McapWriter, RejectsUnknownChannelAndBadOptions) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   McapWriter w;
   McapWriterOptions bad;
   bad.compression = "brotli";
@@ -142,7 +142,7 @@ TEST(McapWriter, RejectsUnknownChannelAndBadOptions) {
 }
 
 TEST(McapSplitWriter, SplitsBySizeAndEveryFileReadsBackCompletely) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const auto msgs = MakeMessages(900);
   McapWriterOptions o;
   o.chunk_size = 16 * 1024;
@@ -178,7 +178,7 @@ TEST(McapSplitWriter, SplitsBySizeAndEveryFileReadsBackCompletely) {
 }
 
 TEST(McapSplitWriter, SplitsByLogTimeDuration) {
-  const auto dir = ScratchDir();
+  const auto dir = ScratchFolderForTest();
   const auto msgs = MakeMessages(300);  // ~300 ms of log time
   McapSplitOptions split;
   split.max_file_duration_ns = 100'000'000;

@@ -17,7 +17,7 @@
 
 namespace rslam::mcap::testing {
 
-inline std::filesystem::path ScratchDir() { return ::rslam::testing::ScratchFolderForTest(); }
+using ::rslam::testing::ScratchFolderForTest;
 
 struct WrittenMessage {
   uint16_t channel;

@@ -27,7 +27,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::SyntheticLoop;
 
-using TempDir = ::rslam::testing::ScratchFolder;
+using ::rslam::testing::ScratchFolder;
 
 std::string ReadFile(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -88,7 +88,7 @@ CliResult RunCli(const std::string& arguments) {
 const char* SharedData() { return std::getenv("RSLAM_SHARED_DATA"); }
 
 TEST(RunCommand, WritesOutputsWhoseCountsAgree) {
-  TempDir dir;
+  ScratchFolder dir;
   const LoopRecording recording(dir.path());
   const fs::path out = dir.path() / "out";
   std::stringstream stdout_text, stderr_text;
@@ -124,7 +124,7 @@ TEST(RunCommand, WritesOutputsWhoseCountsAgree) {
 }
 
 TEST(RunCommand, TwoRunsWriteIdenticalExperiences) {
-  TempDir dir;
+  ScratchFolder dir;
   const LoopRecording recording(dir.path());
   std::stringstream ignored;
   ASSERT_EQ(RunRatSlamCommand(LoopOptions(recording, dir.path() / "a"), ignored, ignored), 0) << ignored.str();
@@ -136,7 +136,7 @@ TEST(RunCommand, TwoRunsWriteIdenticalExperiences) {
 }
 
 TEST(RunCommand, MaxFramesStopsEarly) {
-  TempDir dir;
+  ScratchFolder dir;
   const LoopRecording recording(dir.path(), 20);
   RunOptions options = LoopOptions(recording, dir.path() / "out");
   options.max_frames = 7;
@@ -146,7 +146,7 @@ TEST(RunCommand, MaxFramesStopsEarly) {
 }
 
 TEST(RunCommand, ReadsAVideoWithItsOwnStamps) {
-  TempDir dir;
+  ScratchFolder dir;
   const fs::path video = dir.path() / "loop.avi";
   {
     cv::VideoWriter writer(video.string(), cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10, cv::Size(640, 480));
@@ -177,7 +177,7 @@ TEST(RunCommand, ReadsAVideoWithItsOwnStamps) {
 }
 
 TEST(RunCommandCli, RunsAndReportsTheResult) {
-  TempDir dir;
+  ScratchFolder dir;
   const LoopRecording recording(dir.path(), 12);
   const CliResult r = RunCli("--images " + recording.images.string() + " --config " + recording.config.string() +
                              " --set templates.match_threshold=0.09 --fps 5 --out " + (dir.path() / "out").string());
@@ -195,7 +195,7 @@ TEST(RunCommandCli, MissingOutIsAnError) {
 }
 
 TEST(RunCommandCli, UnknownPresetExitsTwoNamingIt) {
-  TempDir dir;
+  ScratchFolder dir;
   const LoopRecording recording(dir.path(), 2);
   const CliResult r = RunCli("--images " + recording.images.string() + " --preset no_such_place --out " +
                              (dir.path() / "out").string());
@@ -205,7 +205,7 @@ TEST(RunCommandCli, UnknownPresetExitsTwoNamingIt) {
 }
 
 TEST(RunCommandCli, UnknownConfigKeyExitsTwoNamingIt) {
-  TempDir dir;
+  ScratchFolder dir;
   const LoopRecording recording(dir.path(), 2);
   const CliResult r = RunCli("--images " + recording.images.string() +
                              " --preset stlucia --set templates.bogus_key=3 --out " + (dir.path() / "out").string());
@@ -225,7 +225,7 @@ TEST(RunCommandCli, UnknownConfigKeyExitsTwoNamingIt) {
 }
 
 TEST(RunCommandCli, BadInputExitsOneWithTheReason) {
-  TempDir dir;
+  ScratchFolder dir;
   const std::string out = " --out " + (dir.path() / "out").string();
   const CliResult missing = RunCli("--images " + (dir.path() / "nowhere").string() + out);
   EXPECT_EQ(missing.exit_code, 1) << missing.output;
@@ -253,7 +253,7 @@ TEST(RunCommandCli, BadInputExitsOneWithTheReason) {
 
 TEST(RunCommandRealData, IratFramesWithTheIratPreset) {
   if (!SharedData() || !fs::is_directory(fs::path(SharedData()) / "irat")) GTEST_SKIP() << "no shared data";
-  TempDir dir;
+  ScratchFolder dir;
   RunOptions options;
   options.images = (fs::path(SharedData()) / "irat").string();
   options.preset = "irat";
@@ -273,7 +273,7 @@ TEST(RunCommandRealData, IratFramesWithTheIratPreset) {
 TEST(RunCommandRealData, NordlandSummerWithTheNordlandPreset) {
   if (!SharedData() || !fs::is_directory(fs::path(SharedData()) / "nordland" / "summer"))
     GTEST_SKIP() << "no shared data";
-  TempDir dir;
+  ScratchFolder dir;
   RunOptions options;
   options.images = (fs::path(SharedData()) / "nordland" / "summer").string();
   options.preset = "nordland";
