@@ -125,6 +125,12 @@ class OdometryNode::Impl {
       out.wall_seen = true;
       out.wall_direction_rad = *wall_direction;
     }
+    if (floor_) {
+      out.boundary_measured = true;
+      out.boundary.reserve(boundary_points_.size());
+      for (const Eigen::Vector2d& p : boundary_points_)
+        out.boundary.push_back({static_cast<float>(p.x()), static_cast<float>(p.y())});
+    }
     Publish(out);
     context_.SetLastFrame(image.header.frame_seq, image.header.stamp_ns);
   }

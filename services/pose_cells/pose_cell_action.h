@@ -40,6 +40,9 @@ struct Action {
   double pc_y = 0.0;
   double pc_th = 0.0;
   uint64_t sequence = 0;  // meaningful only when kind != kNone
+  // The pose cells recognised experience refused_link_to but its floor boundary did not match
+  // the view's (exp_boundary_check): this kCreate was made instead of the link.
+  uint32_t refused_link_to = kNoExperience;
 };
 
 }  // namespace rslam::pose_cells

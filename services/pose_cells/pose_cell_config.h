@@ -23,6 +23,18 @@ struct PoseCellConfig {
   double pc_vt_restore = 0.05;
   int vt_inject_min_age = 10;      // templates younger than this many templates inject nothing
   double exp_delta_pc_threshold = 2.0;  // pose-cell distance that makes a new experience
+  // Not OpenRatSLAM's: before a link to an experience made at least exp_boundary_min_age_frames
+  // frames ago, register the floor boundary seen now with the one seen when it was made
+  // (boundary_match.h); unless both hold exp_boundary_min_points points and register with a
+  // median residual under exp_boundary_max_residual_m at an offset under
+  // exp_boundary_max_offset_m, make a new experience instead. Needs the odometry's floor
+  // boundary (odometry/velocity, floor_odometry); an experience or frame without one (adopted
+  // from the map after a restart, a frame without odometry) is not checked.
+  bool exp_boundary_check = false;
+  int exp_boundary_min_age_frames = 500;
+  int exp_boundary_min_points = 8;
+  double exp_boundary_max_residual_m = 0.05;
+  double exp_boundary_max_offset_m = 0.7;
 
   template <class V>
   void VisitFields(V& v) {
@@ -42,6 +54,16 @@ struct PoseCellConfig {
       "a template injects only when at least this many templates were learnt after it");
     v("exp_delta_pc_threshold", exp_delta_pc_threshold,
       "pose-cell distance from the current experience that makes a new experience");
+    v("exp_boundary_check", exp_boundary_check,
+      "register the floor boundaries of the two views before linking to an old experience");
+    v("exp_boundary_min_age_frames", exp_boundary_min_age_frames,
+      "links to experiences made at least this many frames ago are checked");
+    v("exp_boundary_min_points", exp_boundary_min_points,
+      "a checked link needs this many boundary points in each view");
+    v("exp_boundary_max_residual_m", exp_boundary_max_residual_m,
+      "a checked link needs the registered boundaries' median residual under this (m)");
+    v("exp_boundary_max_offset_m", exp_boundary_max_offset_m,
+      "a checked link needs the registered offset between the two views under this (m)");
   }
 
   void Validate() const {
@@ -63,6 +85,10 @@ struct PoseCellConfig {
     Require(pc_vt_restore >= 0, "pc_vt_restore", "must be non-negative");
     Require(vt_inject_min_age >= 0, "vt_inject_min_age", "must be non-negative");
     Require(exp_delta_pc_threshold > 0, "exp_delta_pc_threshold", "must be positive");
+    Require(exp_boundary_min_age_frames >= 0, "exp_boundary_min_age_frames", "must be non-negative");
+    Require(exp_boundary_min_points >= 3, "exp_boundary_min_points", "must be at least 3");
+    Require(exp_boundary_max_residual_m > 0, "exp_boundary_max_residual_m", "must be positive");
+    Require(exp_boundary_max_offset_m > 0, "exp_boundary_max_offset_m", "must be positive");
   }
 };
 

@@ -1,5 +1,7 @@
 #include "services/pose_cells/pose_cell_network.h"
 
+#include "services/pose_cells/boundary_match.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -767,9 +769,10 @@ bool PoseCellNetwork::Linked(uint32_t a, uint32_t b) const {
   return std::find(la.begin(), la.end(), b) != la.end();
 }
 
-void PoseCellNetwork::CreateExperience() {
+void PoseCellNetwork::CreateExperience(const FloorBoundary* boundary) {
   const uint32_t id = static_cast<uint32_t>(experiences_.size());
-  experiences_.push_back({best_.x, best_.y, best_.th, current_template_});
+  experiences_.push_back({best_.x, best_.y, best_.th, current_template_, frames_processed_, boundary != nullptr,
+                          boundary ? *boundary : FloorBoundary{}});
   views_[current_template_].experience_ids.push_back(id);
   links_of_.emplace_back();
   if (has_current_experience_) {
@@ -780,13 +783,23 @@ void PoseCellNetwork::CreateExperience() {
   has_current_experience_ = true;
 }
 
-Action PoseCellNetwork::DecideAction() {
+bool PoseCellNetwork::BoundaryAllowsLink(const ExperienceCell& e, const FloorBoundary* boundary) const {
+  if (!config_.exp_boundary_check || !boundary || !e.boundary_known) return true;
+  if (frames_processed_ - e.created_frame < static_cast<uint64_t>(config_.exp_boundary_min_age_frames)) return true;
+  const size_t min_points = static_cast<size_t>(config_.exp_boundary_min_points);
+  if (boundary->size() < min_points || e.boundary.size() < min_points) return false;
+  const BoundaryMatch match = RegisterBoundaries(e.boundary, *boundary);
+  return match.median_residual_m < config_.exp_boundary_max_residual_m &&
+         match.offset_m() < config_.exp_boundary_max_offset_m;
+}
+
+Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
   Action action;
   if (!has_current_template_) return action;
   action.template_id = current_template_;
   const uint32_t from = has_current_experience_ ? current_experience_ : kNoExperience;
   auto create = [&] {
-    CreateExperience();
+    CreateExperience(boundary);
     action.kind = Action::Kind::kCreate;
     action.relative_angle_rad = 0.0;
   };
@@ -814,6 +827,9 @@ Action PoseCellNetwork::DecideAction() {
       }
       if (matched == kNoExperience || !(min_delta < config_.exp_delta_pc_threshold)) {
         create();
+      } else if (!Linked(current_experience_, matched) && !BoundaryAllowsLink(experiences_[matched], boundary)) {
+        create();
+        action.refused_link_to = matched;
       } else {
         if (Linked(current_experience_, matched)) {
           action.kind = Action::Kind::kSet;
@@ -840,12 +856,12 @@ Action PoseCellNetwork::DecideAction() {
 
 Action PoseCellNetwork::ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s,
                                      uint32_t template_id, bool template_is_new,
-                                     double relative_angle_rad) {
+                                     double relative_angle_rad, const FloorBoundary* boundary) {
   ValidateFrame(vtrans_mps, vrot_radps, dt_s, template_id, relative_angle_rad);
   InjectView(template_id, relative_angle_rad, template_is_new);
   Step(vtrans_mps, vrot_radps, dt_s);
   ++frames_processed_;
-  return DecideAction();
+  return DecideAction(boundary);
 }
 
 void PoseCellNetwork::SkipTemplates(uint32_t next_template_id) {
@@ -858,14 +874,15 @@ void PoseCellNetwork::SkipTemplates(uint32_t next_template_id) {
   }
 }
 
-Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_radps, double dt_s) {
+Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_radps, double dt_s,
+                                                const FloorBoundary* boundary) {
   ValidateFrame(vtrans_mps, vrot_radps, dt_s, 0, 0.0);
   Step(vtrans_mps, vrot_radps, dt_s);
   ++frames_processed_;
   // The view is unchanged: only the pose-cell distance can make a new experience.
   previous_template_ = current_template_;
   has_previous_template_ = has_current_template_;
-  return DecideAction();
+  return DecideAction(boundary);
 }
 
 void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& experiences,
@@ -900,10 +917,19 @@ void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& exper
     views_.push_back({p.x, p.y, p.th, config_.vt_active_decay, view_updates_, {}, first_cell[t] != nullptr});
   }
   for (ViewAssociation& v : views_) v.experience_ids.clear();
+  // An experience this network made itself (same id, template and cell) keeps what it knew of
+  // it; the map's other experiences are unchecked by exp_boundary_check.
+  std::vector<ExperienceCell> known = std::move(experiences_);
   experiences_.clear();
   for (uint32_t id = 0; id < n; ++id) {
     const MapExperience& e = experiences[id];
-    experiences_.push_back({e.cell.x, e.cell.y, e.cell.th, e.template_id});
+    if (id < known.size() && known[id].template_id == e.template_id &&
+        std::abs(known[id].pc_x - e.cell.x) < 1e-3 && std::abs(known[id].pc_y - e.cell.y) < 1e-3 &&
+        std::abs(known[id].pc_th - e.cell.th) < 1e-3) {
+      experiences_.push_back(std::move(known[id]));
+    } else {
+      experiences_.push_back({e.cell.x, e.cell.y, e.cell.th, e.template_id, frames_processed_, false, {}});
+    }
     views_[e.template_id].experience_ids.push_back(id);
   }
   links_of_.assign(n, {});
@@ -1006,6 +1032,12 @@ proto::State PoseCellNetwork::SaveState() const {
     pe->set_pc_y(e.pc_y);
     pe->set_pc_th(e.pc_th);
     pe->set_template_id(e.template_id);
+    pe->set_created_frame(e.created_frame);
+    pe->set_boundary_known(e.boundary_known);
+    for (const Eigen::Vector2f& p : e.boundary) {
+      pe->add_boundary_xy(p.x());
+      pe->add_boundary_xy(p.y());
+    }
   }
   for (uint32_t a = 0; a < links_of_.size(); ++a) {
     for (uint32_t b : links_of_[a]) {
@@ -1068,6 +1100,11 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
     if (!finite_pos(e.pc_x(), e.pc_y(), e.pc_th())) fail("experience cell out of range");
     if (e.template_id() >= n_views) fail("experience refers to unknown template");
     if (seen_exp[i] != 1) fail("experience not listed exactly once under its template");
+    if (e.created_frame() > s.frames_processed()) fail("experience made after the last frame");
+    if (e.boundary_xy_size() % 2 != 0 || (!e.boundary_known() && e.boundary_xy_size() > 0))
+      fail("experience boundary is not a list of points");
+    for (float v : e.boundary_xy())
+      if (!std::isfinite(v)) fail("experience boundary point not finite");
   }
   for (const auto& l : s.links()) {
     if (l.from_experience_id() >= n_exps || l.to_experience_id() >= n_exps) fail("link to unknown experience");
@@ -1097,7 +1134,12 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
                       std::vector<uint32_t>(v.experience_ids().begin(), v.experience_ids().end()), !v.unplaced()});
   }
   experiences_.clear();
-  for (const auto& e : s.experiences()) experiences_.push_back({e.pc_x(), e.pc_y(), e.pc_th(), e.template_id()});
+  for (const auto& e : s.experiences()) {
+    FloorBoundary boundary;
+    for (int i = 0; i + 1 < e.boundary_xy_size(); i += 2) boundary.emplace_back(e.boundary_xy(i), e.boundary_xy(i + 1));
+    experiences_.push_back(
+        {e.pc_x(), e.pc_y(), e.pc_th(), e.template_id(), e.created_frame(), e.boundary_known(), std::move(boundary)});
+  }
   links_of_.assign(n_exps, {});
   for (const auto& l : s.links()) {
     links_of_[l.from_experience_id()].push_back(l.to_experience_id());

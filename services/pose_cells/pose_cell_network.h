@@ -26,6 +26,8 @@
 // in the same order per cell as tap-by-tap passes would and without fused multiply-adds, so
 // every CPU computes the same floats.
 
+#include <Eigen/Core>
+
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -41,6 +43,9 @@ struct PoseCellPosition {
   double y = 0.0;   // cells, [0, dim_xy)
   double th = 0.0;  // cells, [0, dim_th)
 };
+
+// A frame's floor boundary (odometry/velocity's boundary): points in the robot frame, metres.
+using FloorBoundary = std::vector<Eigen::Vector2f>;
 
 // An experience as the experience map knows it (its id is its index in the map's list): what a
 // restarted pose-cell service adopts to resynchronise (AdoptExperienceMap).
@@ -58,15 +63,18 @@ class PoseCellNetwork {
   // The single entry point: one call per camera frame with that frame's odometry (vtrans m/s,
   // vrot rad/s over dt s) and view match (template ids dense from 0; template_is_new when the
   // template learner just learnt it). Returns the action for the experience map.
+  // boundary: the frame's floor boundary, kept with an experience made now and compared with an
+  // old experience's before linking to it (exp_boundary_check); nullptr: not measured.
   // Throws std::invalid_argument (state unchanged) on non-finite or negative dt, non-finite
   // velocities or angle, or a template id beyond the next expected id.
   Action ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s, uint32_t template_id,
-                      bool template_is_new, double relative_angle_rad);
+                      bool template_is_new, double relative_angle_rad, const FloorBoundary* boundary = nullptr);
 
   // A frame whose view never arrived (the template learner restarted): path integration only.
   // The current view counts as unchanged, so nothing is injected and no view change drives the
   // decision. Throws std::invalid_argument (state unchanged) as ProcessFrame.
-  Action ProcessFrameWithoutView(double vtrans_mps, double vrot_radps, double dt_s);
+  Action ProcessFrameWithoutView(double vtrans_mps, double vrot_radps, double dt_s,
+                                 const FloorBoundary* boundary = nullptr);
 
   // Resynchronisation after a restart. The experience map is the authority on experiences: it
   // may have applied actions this network never saved (it restarted from an older state) or,
@@ -102,7 +110,8 @@ class PoseCellNetwork {
   void ExciteInhibitNormalise();
   void PathIntegrate(double vtrans_mps, double vrot_radps, double dt_s);
   PoseCellPosition UpdateBestPose();
-  Action DecideAction();
+  // boundary as ProcessFrame's.
+  Action DecideAction(const FloorBoundary* boundary = nullptr);
 
   // Adds energy at one cell (wrapped); for tests and tools.
   void InjectEnergy(int x, int y, int th, double energy);
@@ -148,7 +157,12 @@ class PoseCellNetwork {
   struct ExperienceCell {
     double pc_x, pc_y, pc_th;
     uint32_t template_id;
+    uint64_t created_frame = 0;   // frames_processed_ when made
+    bool boundary_known = false;  // boundary measured (not adopted from the map)
+    FloorBoundary boundary;
   };
+  // exp_boundary_check's verdict on linking to e from a frame that sees boundary.
+  bool BoundaryAllowsLink(const ExperienceCell& e, const FloorBoundary* boundary) const;
   // Active indices along one axis: sorted list, membership mask, and maximal contiguous runs
   // [begin, end) (not wrapping), so inner loops over x are plain vectorisable ranges.
   struct AxisSet {
@@ -220,7 +234,7 @@ class PoseCellNetwork {
   bool Linked(uint32_t a, uint32_t b) const;
   // All activity at one cell (as the constructor starts), best pose there.
   void PlacePacket(const PoseCellPosition& cell);
-  void CreateExperience();
+  void CreateExperience(const FloorBoundary* boundary);
   void ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id,
                      double relative_angle_rad) const;
 

@@ -25,6 +25,8 @@ namespace {
 
 constexpr const char* kStateKind = "rslam.pose_cells.NodeState";
 constexpr uint32_t kStateVersion = 1;
+// One floor-boundary point per degree is 360; more than this is not a boundary.
+constexpr size_t kMaxBoundaryPoints = 4096;
 
 }  // namespace
 
@@ -107,6 +109,12 @@ class PoseCellsNode::Processor {
       return "dt " + std::to_string(v.dt_s) + " s is outside [0, max_dt_s=" + std::to_string(config_.max_dt_s) + "]";
     if (std::abs(v.vtrans_mps) > config_.max_vtrans_mps) return "|vtrans| " + std::to_string(v.vtrans_mps) + " m/s is beyond max_vtrans_mps";
     if (std::abs(v.vrot_radps) > config_.max_vrot_radps) return "|vrot| " + std::to_string(v.vrot_radps) + " rad/s is beyond max_vrot_radps";
+    if (v.boundary.size() > kMaxBoundaryPoints)
+      return "floor boundary of " + std::to_string(v.boundary.size()) + " points (at most " +
+             std::to_string(kMaxBoundaryPoints) + ")";
+    if (!v.boundary_measured && !v.boundary.empty()) return "floor boundary points but boundary_measured is false";
+    for (const msg::FloorPoint& p : v.boundary)
+      if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m)) return "floor boundary has a non-finite point";
     return "";
   }
 
@@ -168,13 +176,24 @@ class PoseCellsNode::Processor {
     }
     if (bridge_pending_) BridgeMissedFrames(frame.frame_seq, header.stamp_ns, dt);
     if (relocalise_frames_left_ > 0) Relocalise(frame.frame_seq, view);
+    FloorBoundary boundary;
+    const bool boundary_measured = frame.velocity && frame.velocity->boundary_measured;
+    if (boundary_measured)
+      for (const msg::FloorPoint& p : frame.velocity->boundary) boundary.emplace_back(p.x_m, p.y_m);
+    const FloorBoundary* seen = boundary_measured ? &boundary : nullptr;
     Action action;
     try {
-      action = view ? network_.ProcessFrame(vtrans, vrot, dt, view->template_id, view->is_new, view->relative_angle_rad)
-                    : network_.ProcessFrameWithoutView(vtrans, vrot, dt);
+      action = view ? network_.ProcessFrame(vtrans, vrot, dt, view->template_id, view->is_new,
+                                            view->relative_angle_rad, seen)
+                    : network_.ProcessFrameWithoutView(vtrans, vrot, dt, seen);
     } catch (const std::invalid_argument& e) {
       context_.Reject("frame", e.what());
       return;
+    }
+    if (action.refused_link_to != kNoExperience) {
+      ++refused_links_;
+      spdlog::debug("frame {}: link to experience {} refused by the floor boundary ({} so far)", header.frame_seq,
+                    action.refused_link_to, refused_links_);
     }
     msg::PoseCellAction out = ToActionMessage(action, next_action_seq_++, vtrans, vrot, dt);
     out.header = header;
@@ -336,6 +355,7 @@ class PoseCellsNode::Processor {
   PoseCellNetwork network_;
   Joiner joiner_;
   uint64_t reported_incomplete_ = 0;
+  uint64_t refused_links_ = 0;  // exp_boundary_check
   uint64_t next_action_seq_ = 0;
   bool has_last_frame_ = false;
   uint64_t last_frame_seq_ = 0;

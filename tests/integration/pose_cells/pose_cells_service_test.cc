@@ -2,11 +2,13 @@
 // pose-cell action per frame out.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -139,6 +141,62 @@ TEST_F(PoseCellsServiceTest, OneActionPerFrameInOrderCreatesThenLinksWhenTheFirs
   if (HasFailure()) ADD_FAILURE() << service->Output();
 }
 
+// A floor boundary as the odometry sends it: one point per degree over 60 degrees within 3 m,
+// of a corner (a wall across 1.5 m ahead, one on the left 0.8 m away) or of a corridor 1.2 m wide.
+std::vector<msg::FloorPoint> Boundary(bool corner) {
+  std::vector<msg::FloorPoint> points;
+  for (int deg = -30; deg <= 30; ++deg) {
+    const double b = deg * std::numbers::pi / 180.0, c = std::cos(b), s = std::sin(b);
+    double r = 3.0;
+    if (corner) r = std::min({r, 1.5 / c, s > 0 ? 0.8 / s : 3.0});
+    else if (deg != 0) r = std::min(r, 0.6 / std::abs(s));
+    if (r < 3.0) points.push_back({static_cast<float>(r * c), static_cast<float>(r * s)});
+  }
+  return points;
+}
+
+TEST_F(PoseCellsServiceTest, BoundaryCheckRefusesTheLoopClosureWhenTheWallsDisagree) {
+  auto service = Start({"--set", "pose_cells.exp_boundary_check=true", "--set",
+                        "pose_cells.exp_boundary_min_age_frames=50"});
+  const int frames = testing::kLapFrames + 10;
+  std::vector<ScriptedFrame> script = testing::ScriptedLoop(frames);
+  for (int i = 0; i < frames; ++i) {  // the first lap sees a corner, the second a corridor
+    script[i].velocity.boundary_measured = true;
+    script[i].velocity.boundary = Boundary(i < testing::kLapFrames);
+  }
+  for (const ScriptedFrame& f : script) {
+    velocity_pub_->Publish(f.velocity);
+    view_pub_->Publish(f.view);
+  }
+  const auto actions = AwaitActions(frames);
+  ASSERT_EQ(actions.size(), static_cast<size_t>(frames)) << service->Output();
+  // The library with the same check and boundaries decides alike; without them it would link.
+  pose_cells::PoseCellConfig config;
+  config.exp_boundary_check = true;
+  config.exp_boundary_min_age_frames = 50;
+  pose_cells::PoseCellNetwork reference(config), unchecked(pose_cells::PoseCellConfig{});
+  int refused = 0, links = 0, unchecked_links = 0;
+  for (int i = 0; i < frames; ++i) {
+    const ScriptedFrame& f = script[i];
+    pose_cells::FloorBoundary boundary;
+    for (const msg::FloorPoint& p : f.velocity.boundary) boundary.emplace_back(p.x_m, p.y_m);
+    const pose_cells::Action want = reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps,
+                                                           f.velocity.dt_s, f.view.template_id, f.view.is_new, 0.0,
+                                                           &boundary);
+    const pose_cells::Action plain = unchecked.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps,
+                                                            f.velocity.dt_s, f.view.template_id, f.view.is_new, 0.0);
+    EXPECT_EQ(actions[i].kind, KindOf(want.kind)) << "frame " << i;
+    if (want.kind != pose_cells::Action::Kind::kNone) EXPECT_EQ(actions[i].experience_id, want.experience_id) << i;
+    refused += want.refused_link_to != pose_cells::kNoExperience;
+    links += actions[i].kind == msg::ActionKind::ACTION_LINK;
+    unchecked_links += plain.kind == pose_cells::Action::Kind::kLink;
+  }
+  EXPECT_GE(unchecked_links, 1);
+  EXPECT_EQ(links, 0);
+  EXPECT_GE(refused, 1);
+  if (HasFailure()) ADD_FAILURE() << service->Output();
+}
+
 TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
   auto service = Start();
   std::vector<ScriptedFrame> script = testing::ScriptedLoop(12);
@@ -147,6 +205,8 @@ TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
   script[6].view.template_count = 501;
   script[7].velocity.dt_s = -0.1;
   script[8].view.relative_angle_rad = std::numeric_limits<double>::infinity();
+  script[9].velocity.boundary_measured = true;
+  script[9].velocity.boundary = {{0.5f, std::numeric_limits<float>::quiet_NaN()}};
   for (const ScriptedFrame& f : script) {
     velocity_pub_->Publish(f.velocity);
     view_pub_->Publish(f.view);
@@ -161,9 +221,9 @@ TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
   }
   EXPECT_EQ(actions[5].vtrans_mps, 0.0);  // refused odometry = no motion
   EXPECT_EQ(actions[5].dt_s, 0.1);        // but the time between the frames still passed
-  const auto status = AwaitStatus(4);
+  const auto status = AwaitStatus(5);
   ASSERT_TRUE(status) << service->Output();
-  EXPECT_GE(status->messages_rejected, 4u);
+  EXPECT_GE(status->messages_rejected, 5u);
   EXPECT_TRUE(service->Running());
 }
 

@@ -66,9 +66,18 @@ json ToJson(const msg::Image& m) {
           {"encoding", m.encoding},     {"step", m.step},         {"data", Bytes(m.data)}};
 }
 json ToJson(const msg::Velocity& m) {
-  return {{"header", ToJson(m.header)}, {"vtrans_mps", m.vtrans_mps}, {"vrot_radps", m.vrot_radps},
-          {"dt_s", m.dt_s},             {"source", static_cast<int>(m.source)},
-          {"wall_seen", m.wall_seen},   {"wall_direction_rad", m.wall_direction_rad}};
+  json boundary = json::array();
+  for (const auto& p : m.boundary)
+    boundary.push_back({{"x_m", static_cast<double>(p.x_m)}, {"y_m", static_cast<double>(p.y_m)}});
+  return {{"header", ToJson(m.header)},
+          {"vtrans_mps", m.vtrans_mps},
+          {"vrot_radps", m.vrot_radps},
+          {"dt_s", m.dt_s},
+          {"source", static_cast<int>(m.source)},
+          {"wall_seen", m.wall_seen},
+          {"wall_direction_rad", m.wall_direction_rad},
+          {"boundary_measured", m.boundary_measured},
+          {"boundary", boundary}};
 }
 json ToJson(const msg::PoseCellAction& m) {
   return {{"header", ToJson(m.header)},

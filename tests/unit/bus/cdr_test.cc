@@ -17,6 +17,8 @@ TEST(CdrTest, VelocityEncodesAsXcdr1LittleEndianWithAlignment) {
   v.source = msg::VelocitySource::VELOCITY_WHEEL;
   v.wall_seen = true;
   v.wall_direction_rad = -0.25;
+  v.boundary_measured = true;
+  v.boundary = {{0.5f, -1.0f}};
   const std::vector<uint8_t> cdr = ToCdr(v);
   const std::vector<uint8_t> expected = {
       0x00, 0x01, 0x00, 0x00,                          // encapsulation CDR_LE
@@ -30,6 +32,9 @@ TEST(CdrTest, VelocityEncodesAsXcdr1LittleEndianWithAlignment) {
       0x01, 0, 0, 0,                                   // enum VELOCITY_WHEEL
       0x01, 0, 0, 0,                                   // true, padded to 8
       0, 0, 0, 0, 0, 0, 0xD0, 0xBF,                    // -0.25
+      0x01, 0, 0, 0,                                   // true, padded to 4 for the count
+      0x01, 0, 0, 0,                                   // one boundary point
+      0, 0, 0, 0x3F, 0, 0, 0x80, 0xBF,                 // (0.5f, -1.0f)
   };
   EXPECT_EQ(cdr, expected);
   EXPECT_EQ(FromCdr<msg::Velocity>(cdr), v);
@@ -90,7 +95,7 @@ TEST(CdrTest, TruncatedOrCorruptMessagesAreRefused) {
   // An unknown enum value is refused.
   msg::Velocity v;
   std::vector<uint8_t> vel = ToCdr(v);
-  vel[vel.size() - 16] = 9;  // the enum, before the bool and its padding and the double
+  vel[vel.size() - 24] = 9;  // the enum, before bool, padding, double, bool, padding, count
   EXPECT_THROW(FromCdr<msg::Velocity>(vel), CdrError);
   // XCDR2 or parameter-list encodings are refused.
   std::vector<uint8_t> xcdr2 = cdr;

@@ -248,24 +248,42 @@ TEST(PoseCellNetwork, RepeatedViewsElsewhereWinOverThePacket) {
   EXPECT_EQ(CountPeaks(net), 1);
 }
 
-// Drives a square of side 6 cells and comes back to the first view.
+// Drives a square of side 6 cells and comes back to the first view. outbound is the floor
+// boundary every frame of the square sees, back the one the frames coming back see (nullptr:
+// not measured).
 struct SquareDrive {
   std::vector<Action> actions;
+  const FloorBoundary* outbound = nullptr;
+  const FloorBoundary* back = nullptr;
   void Run(PoseCellNetwork& net) {
     const double quarter = kPi / 2;
     uint32_t next_template = 0;
-    auto frame = [&](double v, double w, uint32_t tid, bool is_new) {
-      const Action a = net.ProcessFrame(v, w, 1.0, tid, is_new, 0.0);
+    auto frame = [&](double v, double w, uint32_t tid, bool is_new, const FloorBoundary* boundary) {
+      const Action a = net.ProcessFrame(v, w, 1.0, tid, is_new, 0.0, boundary);
       if (a.kind != Action::Kind::kNone) actions.push_back(a);
     };
     for (int side = 0; side < 4; ++side) {
-      for (int i = 0; i < 3; ++i) frame(2.0, 0.0, next_template++, true);
-      frame(0.0, quarter, next_template++, true);
+      for (int i = 0; i < 3; ++i) frame(2.0, 0.0, next_template++, true, outbound);
+      frame(0.0, quarter, next_template++, true, outbound);
     }
-    frame(2.0, 0.0, 0, false);  // back along the first side: the first view again
-    frame(2.0, 0.0, 1, false);  // and the view after it, along the known path
+    frame(2.0, 0.0, 0, false, back);  // back along the first side: the first view again
+    frame(2.0, 0.0, 1, false, back);  // and the view after it, along the known path
   }
 };
+
+// A corner 1.5 m ahead and 0.8 m to the left, as the floor odometry sees it: one point per
+// degree over the camera's 60 degrees, out to 3 m, seen from forward_m along the way to it.
+FloorBoundary CornerAhead(double forward_m) {
+  FloorBoundary points;
+  for (int deg = -30; deg <= 30; ++deg) {
+    const double b = deg * kPi / 180.0, c = std::cos(b), s = std::sin(b);
+    double r = 3.0;
+    if (c > 0) r = std::min(r, (1.5 - forward_m) / c);  // wall across, x = 1.5
+    if (s > 0) r = std::min(r, 0.8 / s);                // wall on the left, y = 0.8
+    if (r < 3.0) points.emplace_back(static_cast<float>(r * c), static_cast<float>(r * s));
+  }
+  return points;
+}
 
 TEST(PoseCellNetwork, SquareLoopEmitsCreatesThenLinkToFirstExperience) {
   PoseCellConfig cfg = SmallConfig();
@@ -290,6 +308,93 @@ TEST(PoseCellNetwork, SquareLoopEmitsCreatesThenLinkToFirstExperience) {
   EXPECT_EQ(along.from_experience_id, 0u);
   EXPECT_EQ(along.experience_id, 1u);
   for (size_t i = 0; i < drive.actions.size(); ++i) EXPECT_EQ(drive.actions[i].sequence, i);
+}
+
+PoseCellConfig BoundaryCheckConfig() {
+  PoseCellConfig cfg = SmallConfig();
+  cfg.exp_boundary_check = true;
+  cfg.exp_boundary_min_age_frames = 10;  // the square's first experience is 16 frames old on return
+  return cfg;
+}
+
+TEST(PoseCellNetwork, BoundaryCheckLinksWhenTheWallsAgree) {
+  PoseCellNetwork net(BoundaryCheckConfig());
+  const FloorBoundary there = CornerAhead(0.0), nearby = CornerAhead(0.3);
+  SquareDrive drive{.outbound = &there, .back = &nearby};
+  drive.Run(net);
+  ASSERT_EQ(drive.actions.size(), 18u);
+  EXPECT_EQ(drive.actions[16].kind, Action::Kind::kLink);
+  EXPECT_EQ(drive.actions[16].experience_id, 0u);
+  EXPECT_EQ(drive.actions[16].refused_link_to, kNoExperience);
+}
+
+TEST(PoseCellNetwork, BoundaryCheckRefusesALinkWhoseWallsDisagree) {
+  const FloorBoundary there = CornerAhead(0.0);
+  FloorBoundary elsewhere;  // a corridor: walls 0.6 m either side, nothing across
+  for (int deg = -30; deg <= 30; ++deg) {
+    const double b = deg * kPi / 180.0;
+    if (deg != 0 && 0.6 / std::abs(std::sin(b)) < 3.0)
+      elsewhere.emplace_back(static_cast<float>(0.6 / std::abs(std::tan(b))), static_cast<float>(deg > 0 ? 0.6 : -0.6));
+  }
+  const FloorBoundary too_few(there.begin(), there.begin() + 5);
+  for (const FloorBoundary* back : std::vector<const FloorBoundary*>{&elsewhere, &too_few}) {
+    PoseCellNetwork net(BoundaryCheckConfig());
+    SquareDrive drive{.outbound = &there, .back = back};
+    drive.Run(net);
+    ASSERT_GE(drive.actions.size(), 17u);
+    const Action& refused = drive.actions[16];
+    EXPECT_EQ(refused.kind, Action::Kind::kCreate);  // a new experience instead of the link
+    EXPECT_EQ(refused.experience_id, 16u);
+    EXPECT_EQ(refused.refused_link_to, 0u);
+  }
+}
+
+TEST(PoseCellNetwork, BoundaryCheckLeavesUnmeasuredYoungAndUncheckedLinksAlone) {
+  const FloorBoundary there = CornerAhead(0.0), empty;
+  PoseCellConfig young = BoundaryCheckConfig();
+  young.exp_boundary_min_age_frames = 17;  // experience 0 is 16 frames old on return
+  PoseCellConfig off = BoundaryCheckConfig();
+  off.exp_boundary_check = false;
+  struct Case {
+    PoseCellConfig cfg;
+    const FloorBoundary* outbound;
+    const FloorBoundary* back;
+  };
+  for (const Case& c : {Case{BoundaryCheckConfig(), &there, nullptr}, Case{BoundaryCheckConfig(), nullptr, &there},
+                        Case{young, &there, &empty}, Case{off, &there, &empty}}) {
+    PoseCellNetwork net(c.cfg);
+    SquareDrive drive{.outbound = c.outbound, .back = c.back};
+    drive.Run(net);
+    ASSERT_EQ(drive.actions.size(), 18u);
+    EXPECT_EQ(drive.actions[16].kind, Action::Kind::kLink);
+  }
+}
+
+TEST(PoseCellNetwork, SavedAndLoadedNetworkKeepsTheBoundaries) {
+  const FloorBoundary there = CornerAhead(0.0), elsewhere = CornerAhead(-1.0);
+  PoseCellNetwork a(BoundaryCheckConfig());
+  SquareDrive drive{.outbound = &there, .back = &elsewhere};
+  drive.Run(a);
+  PoseCellNetwork b(BoundaryCheckConfig());
+  b.LoadState(a.SaveState());
+  EXPECT_EQ(b.SaveState().SerializeAsString(), a.SaveState().SerializeAsString());
+  ASSERT_EQ(drive.actions[16].refused_link_to, 0u);
+  // Both decide alike on what comes next: the corner seen from a metre back, then as it was.
+  for (const FloorBoundary* view : std::vector<const FloorBoundary*>{&elsewhere, &there}) {
+    const Action x = a.ProcessFrame(0.0, 0.0, 1.0, 0, false, 0.0, view);
+    const Action y = b.ProcessFrame(0.0, 0.0, 1.0, 0, false, 0.0, view);
+    EXPECT_EQ(x.kind, y.kind);
+    EXPECT_EQ(x.experience_id, y.experience_id);
+    EXPECT_EQ(x.refused_link_to, y.refused_link_to);
+  }
+  proto::State odd = a.SaveState();
+  odd.mutable_experiences(0)->add_boundary_xy(1.0f);
+  proto::State not_finite = a.SaveState();
+  not_finite.mutable_experiences(0)->set_boundary_xy(0, std::numeric_limits<float>::quiet_NaN());
+  for (const proto::State& bad : {odd, not_finite}) {
+    PoseCellNetwork c(BoundaryCheckConfig());
+    EXPECT_THROW(c.LoadState(bad), std::invalid_argument);
+  }
 }
 
 TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
