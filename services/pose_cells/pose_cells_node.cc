@@ -82,6 +82,8 @@ class PoseCellsNode::Processor {
     {
       std::lock_guard lock(mutex_);
       stopped_ = true;
+      if (config_.network.exp_boundary_check)
+        spdlog::info("{} loop closures refused: the floor boundary did not match", refused_links_);
     }
     SaveState();
   }

@@ -2,10 +2,15 @@
 // integration, best pose, action). BM_PoseCellFrame*: St Lucia-like odometry (6-8 m/s at 10 Hz,
 // gentle turns) with a random old view every fifth frame (far injections: a pessimistic case,
 // the active region keeps several packets). BM_PoseCellFrameRevisit*: a route driven again.
+// BM_RegisterBoundaries: the floor-boundary check of one loop closure (exp_boundary_check),
+// two scans of a corner with range(0) points each (the demo's camera sees at most 61).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
+#include "services/pose_cells/boundary_match.h"
 #include "services/pose_cells/pose_cell_network.h"
 
 namespace {
@@ -79,5 +84,24 @@ BENCHMARK(BM_PoseCellFrameStLucia30x30x36)->Iterations(kMeasuredFrames)->Unit(be
 BENCHMARK(BM_PoseCellFrameDefault21x21x36)->Iterations(kMeasuredFrames)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_PoseCellFrameRevisitStLucia30x30x36)->Iterations(kMeasuredFrames)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_PoseCellFrameRevisitDefault21x21x36)->Iterations(kMeasuredFrames)->Unit(benchmark::kMicrosecond);
+
+// n points over 60 degrees of a corner (a wall across 1.5 m ahead, one 0.8 m to the left), moved
+// back by shift_m (the same corner seen from shift_m further on).
+std::vector<Eigen::Vector2f> Corner(int n, double shift_m) {
+  std::vector<Eigen::Vector2f> points;
+  for (int i = 0; i < n; ++i) {
+    const double b = (-30.0 + 60.0 * i / std::max(1, n - 1)) * M_PI / 180.0, c = std::cos(b), s = std::sin(b);
+    const double r = std::min(1.5 / c, s > 0 ? 0.8 / s : 1e9);
+    points.emplace_back(static_cast<float>(r * c - shift_m), static_cast<float>(r * s));
+  }
+  return points;
+}
+
+void BM_RegisterBoundaries(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const auto stored = Corner(n, 0.0), current = Corner(n, 0.3);
+  for (auto _ : state) benchmark::DoNotOptimize(rslam::pose_cells::RegisterBoundaries(stored, current));
+}
+BENCHMARK(BM_RegisterBoundaries)->Arg(8)->Arg(30)->Arg(61)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

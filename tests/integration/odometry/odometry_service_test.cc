@@ -207,8 +207,9 @@ TEST_F(OdometryServiceTest, WheelOdometryIsRepublishedWithItsHeader) {
 
 // Frames the simulator renders in the shipped world, through the demo's config (floor odometry on):
 // each velocity says whether its frame showed a straight wall and, if so, the walls' direction
-// modulo 90 degrees in the robot frame (the world's walls run along x and y).
-TEST_F(OdometryServiceTest, FloorOdometryReportsTheWallsDirection) {
+// modulo 90 degrees in the robot frame (the world's walls run along x and y), and carries the
+// frame's floor boundary.
+TEST_F(OdometryServiceTest, FloorOdometryReportsTheWallsDirectionAndBoundary) {
   const sim::WorldMap world = sim::WorldMap::LoadFromYaml(RSLAM_SOURCE_DIR "/deploy/worlds/uwb-room.yaml");
   sim::CameraRenderer renderer(world, sim::SceneConfig{}, sim::CameraConfig{});
   occupancy::ObstacleProfilePipeline boundary(occupancy::SimulatorMatchedPipelineConfig());
@@ -246,8 +247,15 @@ TEST_F(OdometryServiceTest, FloorOdometryReportsTheWallsDirection) {
     const auto v = Send(renderer.Render(pose, i), i, static_cast<int64_t>(i + 1) * 100'000'000);
     ASSERT_TRUE(v) << process->Output();
     ASSERT_EQ(v->wall_seen, wall) << "frame " << i;
+    // The floor boundary goes along (for the pose cells' check): in front, within the 3 m range.
+    EXPECT_TRUE(v->boundary_measured);
+    for (const msg::FloorPoint& p : v->boundary) {
+      EXPECT_GT(p.x_m, 0.0f) << "frame " << i;
+      EXPECT_LE(std::hypot(p.x_m, p.y_m), 3.01f) << "frame " << i;
+    }
     if (wall) {
       EXPECT_LT(std::abs(std::remainder(pose.theta + v->wall_direction_rad, M_PI / 2)), 0.02) << "frame " << i;
+      EXPECT_GE(v->boundary.size(), 8u) << "frame " << i;
     }
   }
 }
