@@ -256,18 +256,23 @@ struct SquareDrive {
   const FloorBoundary* outbound = nullptr;
   const FloorBoundary* back = nullptr;
   void Run(PoseCellNetwork& net) {
-    const double quarter = kPi / 2;
+    Outbound(net);
+    Back(net);
+  }
+  void Outbound(PoseCellNetwork& net) {
     uint32_t next_template = 0;
-    auto frame = [&](double v, double w, uint32_t tid, bool is_new, const FloorBoundary* boundary) {
-      const Action a = net.ProcessFrame(v, w, 1.0, tid, is_new, 0.0, boundary);
-      if (a.kind != Action::Kind::kNone) actions.push_back(a);
-    };
     for (int side = 0; side < 4; ++side) {
-      for (int i = 0; i < 3; ++i) frame(2.0, 0.0, next_template++, true, outbound);
-      frame(0.0, quarter, next_template++, true, outbound);
+      for (int i = 0; i < 3; ++i) Frame(net, 2.0, 0.0, next_template++, true, outbound);
+      Frame(net, 0.0, kPi / 2, next_template++, true, outbound);
     }
-    frame(2.0, 0.0, 0, false, back);  // back along the first side: the first view again
-    frame(2.0, 0.0, 1, false, back);  // and the view after it, along the known path
+  }
+  void Back(PoseCellNetwork& net) {
+    Frame(net, 2.0, 0.0, 0, false, back);  // back along the first side: the first view again
+    Frame(net, 2.0, 0.0, 1, false, back);  // and the view after it, along the known path
+  }
+  void Frame(PoseCellNetwork& net, double v, double w, uint32_t tid, bool is_new, const FloorBoundary* boundary) {
+    const Action a = net.ProcessFrame(v, w, 1.0, tid, is_new, 0.0, boundary);
+    if (a.kind != Action::Kind::kNone) actions.push_back(a);
   }
 };
 
@@ -367,6 +372,36 @@ TEST(PoseCellNetwork, BoundaryCheckLeavesUnmeasuredYoungAndUncheckedLinksAlone) 
     drive.Run(net);
     ASSERT_EQ(drive.actions.size(), 18u);
     EXPECT_EQ(drive.actions[16].kind, Action::Kind::kLink);
+  }
+}
+
+// After a restart the network adopts the experience map's experiences: those it made itself
+// (same id, template and cell) keep their boundaries and stay checked; the others are unchecked.
+TEST(PoseCellNetwork, AdoptedMapKeepsTheBoundariesOfTheNetworksOwnExperiences) {
+  const FloorBoundary there = CornerAhead(0.0), elsewhere = CornerAhead(-1.0);
+  for (const bool same_cells : {true, false}) {
+    PoseCellNetwork net(BoundaryCheckConfig());
+    SquareDrive drive{.outbound = &there, .back = &elsewhere};
+    drive.Outbound(net);
+    std::vector<MapExperience> map;
+    std::vector<std::pair<uint32_t, uint32_t>> links;
+    for (const Action& a : drive.actions) {
+      const double shift = same_cells ? 0.0 : 0.5;  // a map whose experiences this network did not make
+      map.push_back({a.template_id, {std::fmod(a.pc_x + shift, 21.0), a.pc_y, a.pc_th}});
+      if (a.from_experience_id != kNoExperience) links.emplace_back(a.from_experience_id, a.experience_id);
+    }
+    ASSERT_EQ(map.size(), 16u);
+    net.AdoptExperienceMap(map, links, 15, /*move_packet=*/false);
+    drive.Back(net);
+    ASSERT_EQ(drive.actions.size(), 18u);
+    const Action& back = drive.actions[16];
+    if (same_cells) {
+      EXPECT_EQ(back.kind, Action::Kind::kCreate);
+      EXPECT_EQ(back.refused_link_to, 0u);
+    } else {
+      EXPECT_EQ(back.kind, Action::Kind::kLink);
+      EXPECT_EQ(back.experience_id, 0u);
+    }
   }
 }
 
