@@ -83,7 +83,7 @@ class PoseCellsNode::Processor {
       std::lock_guard lock(mutex_);
       stopped_ = true;
       if (config_.network.exp_boundary_check)
-        spdlog::info("{} loop closures refused: the floor boundary did not match", refused_links_);
+        spdlog::info("floor boundary check: {} loop closures refused", refused_links_);
     }
     SaveState();
   }
