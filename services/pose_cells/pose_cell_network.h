@@ -17,7 +17,9 @@
 //      OpenRatSLAM's four-quadrant weights); then activity shifts in theta by vrot * dt, the
 //      fraction split linearly between the two neighbouring layers.
 //   4. best pose: population vector (circular mean) over +-pc_cells_to_avg cells around the peak.
-//   5. action: OpenRatSLAM get_action with explicit ids.
+//   5. action: OpenRatSLAM get_action with explicit ids; with exp_boundary_check a new link to
+//      an old experience must also pass the floor-boundary check (boundary_match.h), else the
+//      network makes a new experience.
 //
 // Speed: activity is compact, so every pass runs only over the product of the active index sets
 // of x, y and theta (dilated by the kernel radius or the shift); buffers are preallocated and
