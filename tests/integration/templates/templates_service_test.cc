@@ -40,8 +40,6 @@ class TemplatesServiceTest : public ::testing::Test {
 
   // Whole-image 32x16 patch templates; a long save period so the journal is what survives a kill.
   std::unique_ptr<ChildProcess> Start(std::vector<std::string> extra = {}) {
-    const int readers = images_->MatchedSubscribers();
-    const int writers = views_->MatchedPublishers();
     std::vector<std::string> args{"--domain",    std::to_string(domain_.id()), "--state-dir",
                                   state_.path().string(), "--set", "service.heartbeat_period_s=0.2",
                                   "--set",       "service.state_save_period_s=1000"};
@@ -54,8 +52,23 @@ class TemplatesServiceTest : public ::testing::Test {
       args.push_back("templates." + k);
     }
     auto process = std::make_unique<ChildProcess>(kBinary, args);
+    // Ready when this process's own heartbeat shows its image reader and view writer matched:
+    // the test's match counts may still include a process stopped or killed just before.
+    const auto pid = static_cast<uint32_t>(process->pid());
+    auto ready = [&](const msg::ServiceStatus& s) {
+      bool reader = false, writer = false;
+      for (const msg::EndpointMatch& e : s.endpoints) {
+        if (e.topic == bus::topics::kCameraImage.name && !e.writer) reader = e.matched > 0;
+        if (e.topic == bus::topics::kTemplatesView.name && e.writer) writer = e.matched > 0;
+      }
+      return s.pid == pid && reader && writer;
+    };
     const bool matched = testing::WaitFor(
-        [&] { return images_->MatchedSubscribers() > readers && views_->MatchedPublishers() > writers; }, 10s);
+        [&] {
+          const auto s = heartbeats_->TakeOne(100ms);
+          return s && ready(*s);
+        },
+        10s);
     EXPECT_TRUE(matched) << process->Output();
     return process;
   }
