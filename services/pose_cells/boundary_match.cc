@@ -1,5 +1,7 @@
 #include "services/pose_cells/boundary_match.h"
 
+#include "common/math/angle.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -81,7 +83,7 @@ bool Update(const Pairing& pairing, Eigen::Vector3d& pose) {
   const Eigen::Vector3d step(0.0, 0.0, turn);
   const Eigen::Vector2d shift = mean_b - Apply(step, mean_a);
   const Eigen::Vector2d position = Apply(step, pose.head<2>()) + shift;
-  pose = {position.x(), position.y(), std::remainder(pose.z() + turn, 2.0 * M_PI)};
+  pose = {position.x(), position.y(), WrapAngle(pose.z() + turn)};
   return true;
 }
 

@@ -29,7 +29,8 @@ struct PoseCellConfig {
   // median residual under exp_boundary_max_residual_m at an offset under
   // exp_boundary_max_offset_m, make a new experience instead. Needs the odometry's floor
   // boundary (odometry/velocity, floor_odometry); an experience or frame without one (adopted
-  // from the map after a restart, a frame without odometry) is not checked.
+  // from the map after a restart, a frame without odometry) is not checked. The service keeps
+  // the boundaries only while the check is on.
   bool exp_boundary_check = false;
   int exp_boundary_min_age_frames = 500;
   int exp_boundary_min_points = 8;

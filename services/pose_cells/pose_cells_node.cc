@@ -178,11 +178,13 @@ class PoseCellsNode::Processor {
     }
     if (bridge_pending_) BridgeMissedFrames(frame.frame_seq, header.stamp_ns, dt);
     if (relocalise_frames_left_ > 0) Relocalise(frame.frame_seq, view);
-    FloorBoundary boundary;
-    const bool boundary_measured = frame.velocity && frame.velocity->boundary_measured;
-    if (boundary_measured)
-      for (const msg::FloorPoint& p : frame.velocity->boundary) boundary.emplace_back(p.x_m, p.y_m);
-    const FloorBoundary* seen = boundary_measured ? &boundary : nullptr;
+    // The boundary matters only to the check: without it nothing is converted or kept.
+    const FloorBoundary* seen = nullptr;
+    if (config_.network.exp_boundary_check && frame.velocity && frame.velocity->boundary_measured) {
+      boundary_.clear();
+      for (const msg::FloorPoint& p : frame.velocity->boundary) boundary_.emplace_back(p.x_m, p.y_m);
+      seen = &boundary_;
+    }
     Action action;
     try {
       action = view ? network_.ProcessFrame(vtrans, vrot, dt, view->template_id, view->is_new,
@@ -358,6 +360,7 @@ class PoseCellsNode::Processor {
   Joiner joiner_;
   uint64_t reported_incomplete_ = 0;
   uint64_t refused_links_ = 0;  // exp_boundary_check
+  FloorBoundary boundary_;      // the frame's, reused
   uint64_t next_action_seq_ = 0;
   bool has_last_frame_ = false;
   uint64_t last_frame_seq_ = 0;

@@ -2,13 +2,11 @@
 // pose-cell action per frame out.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <memory>
-#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +17,7 @@
 #include "services/pose_cells/pose_cell_network.h"
 #include "tests/support/child_process.h"
 #include "tests/integration/pose_cells/scripted_loop.h"
+#include "tests/support/floor_boundary_scans.h"
 #include "tests/support/test_domain.h"
 
 namespace rslam {
@@ -141,17 +140,10 @@ TEST_F(PoseCellsServiceTest, OneActionPerFrameInOrderCreatesThenLinksWhenTheFirs
   if (HasFailure()) ADD_FAILURE() << service->Output();
 }
 
-// A floor boundary as the odometry sends it: one point per degree over 60 degrees within 3 m,
-// of a corner (a wall across 1.5 m ahead, one on the left 0.8 m away) or of a corridor 1.2 m wide.
-std::vector<msg::FloorPoint> Boundary(bool corner) {
+// A scan of the support header as the odometry's message carries it.
+std::vector<msg::FloorPoint> Message(const std::vector<Eigen::Vector2f>& scan) {
   std::vector<msg::FloorPoint> points;
-  for (int deg = -30; deg <= 30; ++deg) {
-    const double b = deg * std::numbers::pi / 180.0, c = std::cos(b), s = std::sin(b);
-    double r = 3.0;
-    if (corner) r = std::min({r, 1.5 / c, s > 0 ? 0.8 / s : 3.0});
-    else if (deg != 0) r = std::min(r, 0.6 / std::abs(s));
-    if (r < 3.0) points.push_back({static_cast<float>(r * c), static_cast<float>(r * s)});
-  }
+  for (const Eigen::Vector2f& p : scan) points.push_back({p.x(), p.y()});
   return points;
 }
 
@@ -162,7 +154,7 @@ TEST_F(PoseCellsServiceTest, BoundaryCheckRefusesTheLoopClosureWhenTheWallsDisag
   std::vector<ScriptedFrame> script = testing::ScriptedLoop(frames);
   for (int i = 0; i < frames; ++i) {  // the first lap sees a corner, the second a corridor
     script[i].velocity.boundary_measured = true;
-    script[i].velocity.boundary = Boundary(i < testing::kLapFrames);
+    script[i].velocity.boundary = Message(i < testing::kLapFrames ? testing::CornerScan() : testing::CorridorScan());
   }
   for (const ScriptedFrame& f : script) {
     velocity_pub_->Publish(f.velocity);

@@ -1,6 +1,7 @@
 // Pins the pose-cell network's dynamics (against a dense OpenRatSLAM-style reference), its path
 // integration, view injection (001 eqs. 3-4), the explicit-id action sequence and persistence.
 #include "services/pose_cells/pose_cell_network.h"
+#include "tests/support/floor_boundary_scans.h"
 
 #include <gtest/gtest.h>
 
@@ -276,19 +277,8 @@ struct SquareDrive {
   }
 };
 
-// A corner 1.5 m ahead and 0.8 m to the left, as the floor odometry sees it: one point per
-// degree over the camera's 60 degrees, out to 3 m, seen from forward_m along the way to it.
-FloorBoundary CornerAhead(double forward_m) {
-  FloorBoundary points;
-  for (int deg = -30; deg <= 30; ++deg) {
-    const double b = deg * kPi / 180.0, c = std::cos(b), s = std::sin(b);
-    double r = 3.0;
-    if (c > 0) r = std::min(r, (1.5 - forward_m) / c);  // wall across, x = 1.5
-    if (s > 0) r = std::min(r, 0.8 / s);                // wall on the left, y = 0.8
-    if (r < 3.0) points.emplace_back(static_cast<float>(r * c), static_cast<float>(r * s));
-  }
-  return points;
-}
+using testing::CornerScan;
+using testing::CorridorScan;
 
 TEST(PoseCellNetwork, SquareLoopEmitsCreatesThenLinkToFirstExperience) {
   PoseCellConfig cfg = SmallConfig();
@@ -324,7 +314,7 @@ PoseCellConfig BoundaryCheckConfig() {
 
 TEST(PoseCellNetwork, BoundaryCheckLinksWhenTheWallsAgree) {
   PoseCellNetwork net(BoundaryCheckConfig());
-  const FloorBoundary there = CornerAhead(0.0), nearby = CornerAhead(0.3);
+  const FloorBoundary there = CornerScan(0.0), nearby = CornerScan(0.3);
   SquareDrive drive{.outbound = &there, .back = &nearby};
   drive.Run(net);
   ASSERT_EQ(drive.actions.size(), 18u);
@@ -334,13 +324,7 @@ TEST(PoseCellNetwork, BoundaryCheckLinksWhenTheWallsAgree) {
 }
 
 TEST(PoseCellNetwork, BoundaryCheckRefusesALinkWhoseWallsDisagree) {
-  const FloorBoundary there = CornerAhead(0.0);
-  FloorBoundary elsewhere;  // a corridor: walls 0.6 m either side, nothing across
-  for (int deg = -30; deg <= 30; ++deg) {
-    const double b = deg * kPi / 180.0;
-    if (deg != 0 && 0.6 / std::abs(std::sin(b)) < 3.0)
-      elsewhere.emplace_back(static_cast<float>(0.6 / std::abs(std::tan(b))), static_cast<float>(deg > 0 ? 0.6 : -0.6));
-  }
+  const FloorBoundary there = CornerScan(0.0), elsewhere = CorridorScan();
   const FloorBoundary too_few(there.begin(), there.begin() + 5);
   for (const FloorBoundary* back : std::vector<const FloorBoundary*>{&elsewhere, &too_few}) {
     PoseCellNetwork net(BoundaryCheckConfig());
@@ -355,7 +339,7 @@ TEST(PoseCellNetwork, BoundaryCheckRefusesALinkWhoseWallsDisagree) {
 }
 
 TEST(PoseCellNetwork, BoundaryCheckLeavesUnmeasuredYoungAndUncheckedLinksAlone) {
-  const FloorBoundary there = CornerAhead(0.0), empty;
+  const FloorBoundary there = CornerScan(0.0), empty;
   PoseCellConfig young = BoundaryCheckConfig();
   young.exp_boundary_min_age_frames = 17;  // experience 0 is 16 frames old on return
   PoseCellConfig off = BoundaryCheckConfig();
@@ -378,7 +362,7 @@ TEST(PoseCellNetwork, BoundaryCheckLeavesUnmeasuredYoungAndUncheckedLinksAlone) 
 // After a restart the network adopts the experience map's experiences: those it made itself
 // (same id, template and cell) keep their boundaries and stay checked; the others are unchecked.
 TEST(PoseCellNetwork, AdoptedMapKeepsTheBoundariesOfTheNetworksOwnExperiences) {
-  const FloorBoundary there = CornerAhead(0.0), elsewhere = CornerAhead(-1.0);
+  const FloorBoundary there = CornerScan(0.0), elsewhere = CornerScan(-1.0);
   for (const bool same_cells : {true, false}) {
     PoseCellNetwork net(BoundaryCheckConfig());
     SquareDrive drive{.outbound = &there, .back = &elsewhere};
@@ -406,7 +390,7 @@ TEST(PoseCellNetwork, AdoptedMapKeepsTheBoundariesOfTheNetworksOwnExperiences) {
 }
 
 TEST(PoseCellNetwork, SavedAndLoadedNetworkKeepsTheBoundaries) {
-  const FloorBoundary there = CornerAhead(0.0), elsewhere = CornerAhead(-1.0);
+  const FloorBoundary there = CornerScan(0.0), elsewhere = CornerScan(-1.0);
   PoseCellNetwork a(BoundaryCheckConfig());
   SquareDrive drive{.outbound = &there, .back = &elsewhere};
   drive.Run(a);
