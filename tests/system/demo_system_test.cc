@@ -84,6 +84,15 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   EXPECT_GE(summary["ate_m"].get<double>(), 0.0);
   ASSERT_TRUE(summary["ate_odometry_m"].is_number());
   EXPECT_GE(summary["ate_odometry_m"].get<double>(), 0.0);
+  // The final map is judged at its experiences' frames (at most one pair each), the odometry at the
+  // same frames (those it has a velocity for), the live path at every frame.
+  EXPECT_GE(summary["alignment"]["pairs"].get<int64_t>(), 2);
+  EXPECT_LE(summary["alignment"]["pairs"].get<int64_t>(), summary["experiences"].get<int64_t>());
+  EXPECT_GE(summary["odometry_alignment"]["pairs"].get<int64_t>(), 2);
+  EXPECT_LE(summary["odometry_alignment"]["pairs"].get<int64_t>(), summary["alignment"]["pairs"].get<int64_t>());
+  ASSERT_TRUE(summary["live_path"]["ate_m"].is_number()) << summary.dump(2);
+  EXPECT_GT(summary["live_path"]["frames"].get<int64_t>(), summary["alignment"]["pairs"].get<int64_t>());
+  ASSERT_TRUE(summary["live_path"]["ate_odometry_m"].is_number());
   EXPECT_GT(summary["wall_s"].get<double>(), 0.0);
   if (!summary["recording"].is_null()) {
     EXPECT_TRUE(fs::exists(summary["recording"].get<std::string>()));

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 
 namespace rslam::demo {
@@ -150,6 +151,30 @@ std::vector<FramePose> DeadReckon(std::vector<FrameVelocity> odometry) {
     }
     out.push_back({v.frame_seq, v.stamp_ns, x, y, theta});
   }
+  return out;
+}
+
+std::vector<FramePose> ExperienceMapTrajectory(const msg::ExperienceMap& map, const DemoObservations& seen) {
+  std::map<uint64_t, int64_t> stamp_by_frame;
+  for (const auto& t : seen.ground_truth) stamp_by_frame[t.frame_seq] = t.stamp_ns;
+  std::vector<FramePose> out;
+  for (const auto& e : map.experiences) {
+    const auto first = seen.experience_first_frame.find(e.id);
+    if (first == seen.experience_first_frame.end()) continue;
+    const auto stamp = stamp_by_frame.find(first->second);
+    if (stamp == stamp_by_frame.end()) continue;
+    out.push_back({first->second, stamp->second, e.x_m, e.y_m, e.theta_rad});
+  }
+  std::sort(out.begin(), out.end(), [](const FramePose& a, const FramePose& b) { return a.frame_seq < b.frame_seq; });
+  return out;
+}
+
+std::vector<FramePose> AtFrames(std::span<const FramePose> trajectory, std::span<const FramePose> frames) {
+  std::set<uint64_t> wanted;
+  for (const auto& f : frames) wanted.insert(f.frame_seq);
+  std::vector<FramePose> out;
+  for (const auto& p : trajectory)
+    if (wanted.count(p.frame_seq)) out.push_back(p);
   return out;
 }
 

@@ -6,8 +6,12 @@
 //     the world within a tolerance (walls are occupied or unknown world cells);
 //   - loop-closure precision: share of loop-closing links whose two experiences were created
 //     within a distance of each other in ground truth;
-//   - absolute trajectory errors (tools/eval/trajectory_alignment.h) of the experience map and of
-//     dead-reckoned odometry, each after a 2-D similarity alignment to ground truth.
+//   - absolute trajectory errors (tools/eval/trajectory_alignment.h), each after a 2-D similarity
+//     alignment to ground truth: of the final experience map (each experience where the map ends
+//     up putting it, against the true pose at the frame it was made, as SLAM benchmarks judge a
+//     run's final key-frame trajectory) and of dead-reckoned odometry at the same frames; and of
+//     the live path (the map's pose estimate frame by frame, as it was at that frame) and the
+//     odometry over every frame.
 // The experience map (and the grid built on it) starts at the robot's start pose: map frame =
 // world frame moved by the start pose. Pure functions of their inputs.
 
@@ -73,6 +77,14 @@ LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
 
 // Dead reckoning of per-frame velocities (frame order), from (0, 0, 0): turn, then drive.
 std::vector<FramePose> DeadReckon(std::vector<FrameVelocity> odometry);
+
+// The final experience map as a trajectory: each experience of `map` at the frame it was first
+// current, stamped with that frame's ground-truth stamp, in frame order. Experiences without a
+// first frame or without ground truth at it are left out.
+std::vector<FramePose> ExperienceMapTrajectory(const msg::ExperienceMap& map, const DemoObservations& seen);
+
+// The poses of `trajectory` at the frames of `frames` (matched by frame_seq), in trajectory order.
+std::vector<FramePose> AtFrames(std::span<const FramePose> trajectory, std::span<const FramePose> frames);
 
 // ATE after a similarity alignment (stamps matched exactly, within 1 ms); none when fewer than
 // two poses pair up or the estimate does not move.

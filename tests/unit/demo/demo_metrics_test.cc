@@ -1,4 +1,5 @@
-// The demo's figures of merit (tools/demo/demo_metrics.h): placing a map in the world.
+// The demo's figures of merit (tools/demo/demo_metrics.h): placing a map in the world, and the
+// final map's trajectory error.
 
 #include "tools/demo/demo_metrics.h"
 
@@ -59,6 +60,64 @@ TEST(DemoMetricsTest, FitMapToWorldNeedsTwoExperiencesWithGroundTruth) {
   const std::map<uint32_t, sim::Pose2D> truth = {{0, {1.0, 2.0, 0.0}}};
   const std::vector<msg::Experience> map = {At(0, 0, 0), At(1, 1, 0)};
   EXPECT_FALSE(FitMapToWorld(map, truth).has_value());
+}
+
+// Ground truth of frames 0..9 on an L-shaped path, stamped 100 ms apart.
+DemoObservations LPath() {
+  DemoObservations seen;
+  for (uint64_t f = 0; f < 10; ++f) {
+    const double x = f < 5 ? f * 1.0 : 4.0, y = f < 5 ? 0.0 : (f - 4) * 1.0;
+    seen.ground_truth.push_back({f, static_cast<int64_t>(f) * 100'000'000, x, y, 0.0});
+  }
+  return seen;
+}
+
+TEST(DemoMetricsTest, ExperienceMapTrajectoryJudgesWhereTheFinalMapPutsEachExperience) {
+  DemoObservations seen = LPath();
+  // Experiences first current at frames 0, 3, 6 and 9; one never current (ignored), one current at
+  // a frame without ground truth (ignored).
+  seen.experience_first_frame = {{10, 0}, {11, 3}, {12, 6}, {13, 9}, {15, 42}};
+  msg::ExperienceMap map{};
+  // The final map holds them at half scale, turned a quarter turn: a similarity of the truth.
+  for (const auto& [id, frame] : seen.experience_first_frame) {
+    if (frame >= seen.ground_truth.size()) {
+      map.experiences.push_back(At(id, 9.0, 9.0));
+      continue;
+    }
+    const FramePose& t = seen.ground_truth[frame];
+    map.experiences.push_back(At(id, -0.5 * t.y, 0.5 * t.x));
+  }
+  map.experiences.push_back(At(14, 7.0, 7.0));
+  const std::vector<FramePose> trajectory = ExperienceMapTrajectory(map, seen);
+  ASSERT_EQ(trajectory.size(), 4u);
+  for (size_t i = 0; i < trajectory.size(); ++i) {
+    EXPECT_EQ(trajectory[i].frame_seq, 3 * i);
+    EXPECT_EQ(trajectory[i].stamp_ns, seen.ground_truth[3 * i].stamp_ns);
+  }
+  const auto error = TrajectoryErrorAgainstTruth(trajectory, seen.ground_truth);
+  ASSERT_TRUE(error.has_value());
+  EXPECT_EQ(error->pairs, 4u);
+  EXPECT_NEAR(error->ate_m, 0.0, 1e-9);
+  EXPECT_NEAR(error->scale, 2.0, 1e-9);
+
+  // Moving one experience in the final map is what the error sees.
+  map.experiences[1].x_m += 1.0;
+  EXPECT_GT(TrajectoryErrorAgainstTruth(ExperienceMapTrajectory(map, seen), seen.ground_truth)->ate_m, 0.1);
+}
+
+TEST(DemoMetricsTest, AtFramesComparesTheOdometryAtTheExperiencesFrames) {
+  const DemoObservations seen = LPath();
+  // Odometry exact at frames 0, 3, 6, 9 and 1 m off at the others.
+  std::vector<FramePose> odometry = seen.ground_truth;
+  for (auto& p : odometry)
+    if (p.frame_seq % 3 != 0) p.y += 1.0;
+  const std::vector<FramePose> experiences = {seen.ground_truth[0], seen.ground_truth[3], seen.ground_truth[6],
+                                              seen.ground_truth[9]};
+  const std::vector<FramePose> sampled = AtFrames(odometry, experiences);
+  ASSERT_EQ(sampled.size(), 4u);
+  EXPECT_EQ(sampled[2].frame_seq, 6u);
+  EXPECT_NEAR(TrajectoryErrorAgainstTruth(sampled, seen.ground_truth)->ate_m, 0.0, 1e-9);
+  EXPECT_GT(TrajectoryErrorAgainstTruth(odometry, seen.ground_truth)->ate_m, 0.3);
 }
 
 }  // namespace
