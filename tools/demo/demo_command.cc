@@ -12,6 +12,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <numbers>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -21,6 +22,7 @@
 #include "tools/demo/demo_artifacts.h"
 #include "tools/demo/demo_metrics.h"
 #include "tools/demo/demo_monitor.h"
+#include "services/experience_map/experience_map_node_config.h"
 #include "tools/launch/launch_command.h"
 #include "tools/launch/launch_profile.h"
 #include "tools/launch/process_supervisor.h"
@@ -167,6 +169,11 @@ int RunDemo(const DemoOptions& options) {
   const sim::Pose2D start = sim::StartPoseOf(sim_config, world);
   const std::vector<Eigen::Vector2i> reachable =
       ReachableFootprint(world, start, sim_config.sim.motion.robot_radius_m);
+  // The map frame in the world (the experience map's first facing is OpenRatSLAM's 90 degrees
+  // unless configured).
+  experience_map::ExperienceMapNodeConfig map_config;
+  LoadConfigSection(root, "experience_map", map_config);
+  const sim::Pose2D map_origin = MapOrigin(start, map_config.map.exp_initial_em_deg * std::numbers::pi / 180);
 
   std::cout << "rslam demo: " << world_path << " (" << reachable.size() << " reachable free cells), start ("
             << start.x << ", " << start.y << ", " << start.theta << "), " << dds << " domain " << domain
@@ -239,7 +246,7 @@ int RunDemo(const DemoOptions& options) {
       last_grid_version = p.grid_version;
       if (auto grid = monitor.LatestGrid()) {
         try {
-          live_coverage = CompareGridWithWorld(world, reachable, start, *grid, world.resolution()).coverage;
+          live_coverage = CompareGridWithWorld(world, reachable, map_origin, *grid, world.resolution()).coverage;
         } catch (const std::exception&) {
         }
       }
@@ -287,7 +294,7 @@ int RunDemo(const DemoOptions& options) {
       seen.map ? FitMapToWorld(seen.map->experiences, experience_truth) : std::nullopt;
   std::optional<GridComparison> grid_check, grid_at_start;
   if (seen.grid) {
-    grid_at_start = CompareGridWithWorld(world, reachable, start, *seen.grid, world.resolution());
+    grid_at_start = CompareGridWithWorld(world, reachable, map_origin, *seen.grid, world.resolution());
     grid_check = map_to_world ? CompareGridWithWorld(world, reachable, *map_to_world, *seen.grid, world.resolution())
                               : grid_at_start;
     WriteMapServerGrid(*seen.grid, out / "grid");
@@ -384,9 +391,9 @@ int RunDemo(const DemoOptions& options) {
          << "  (dead reckoning of odometry/velocity at the same frames, same alignment)\n"
          << "ATE live path       " << Metres(ate_of(ate_live)) << "  (the map's pose at each frame, as it was then; odometry "
          << Metres(ate_of(ate_odometry_all)) << ")\n\n"
-         << "The map frame starts at the robot's start pose. Coverage and precision place the grid in the world\n"
-         << "by the rigid fit of the experiences to their ground truth (the map's shape, as ATE judges the\n"
-         << "path); placed by the start pose alone they are "
+         << "The map frame starts at the robot's start pose (turned by the map's initial facing). Coverage and\n"
+         << "precision place the grid in the world by the rigid fit of the experiences to their ground truth\n"
+         << "(the map's shape, as ATE judges it); placed by the start pose alone they are "
          << Percent(grid_at_start ? std::optional(grid_at_start->coverage) : std::nullopt) << " and "
          << Percent(grid_at_start ? std::optional(grid_at_start->precision) : std::nullopt) << ".\n";
   for (const auto& n : notes) report << "note: " << n << "\n";

@@ -1,5 +1,6 @@
 #include "tools/demo/demo_metrics.h"
 
+#include "common/math/angle.h"
 #include "tools/eval/trajectory_alignment.h"
 
 #include <opencv2/imgproc.hpp>
@@ -10,6 +11,10 @@
 #include <stdexcept>
 
 namespace rslam::demo {
+
+sim::Pose2D MapOrigin(const sim::Pose2D& start, double initial_facing_rad) {
+  return {start.x, start.y, WrapAngle(start.theta - initial_facing_rad)};
+}
 
 sim::Pose2D MapToWorld(const sim::Pose2D& start, double x, double y) {
   const double c = std::cos(start.theta), s = std::sin(start.theta);

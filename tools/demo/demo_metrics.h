@@ -12,8 +12,9 @@
 //     run's final key-frame trajectory) and of dead-reckoned odometry at the same frames; and of
 //     the live path (the map's pose estimate frame by frame, as it was at that frame) and the
 //     odometry over every frame.
-// The experience map (and the grid built on it) starts at the robot's start pose: map frame =
-// world frame moved by the start pose. Pure functions of their inputs.
+// The experience map (and the grid built on it) starts at the robot's start position, turned by
+// the map's initial facing (the demo's map origin: the pose of the map frame in the world). Pure
+// functions of their inputs.
 
 #include <cstdint>
 #include <map>
@@ -33,7 +34,12 @@ namespace rslam::demo {
 inline constexpr int kFreeAtMost = 19;      // free_thresh 0.196
 inline constexpr int kOccupiedAtLeast = 66; // occupied_thresh 0.65
 
-// Map frame (origin = start pose) to world frame.
+// The map frame's pose in the world: its origin at the start position; the robot, facing
+// start.theta in the world, faces initial_facing_rad in the map (the experience map's
+// exp_initial_em_deg).
+sim::Pose2D MapOrigin(const sim::Pose2D& start, double initial_facing_rad);
+
+// Map frame (whose pose in the world is `start`, the map origin) to world frame.
 sim::Pose2D MapToWorld(const sim::Pose2D& start, double x, double y);
 
 struct GridComparison {

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <vector>
 
 namespace rslam::demo {
@@ -60,6 +61,20 @@ TEST(DemoMetricsTest, FitMapToWorldNeedsTwoExperiencesWithGroundTruth) {
   const std::map<uint32_t, sim::Pose2D> truth = {{0, {1.0, 2.0, 0.0}}};
   const std::vector<msg::Experience> map = {At(0, 0, 0), At(1, 1, 0)};
   EXPECT_FALSE(FitMapToWorld(map, truth).has_value());
+}
+
+TEST(DemoMetricsTest, MapOriginTurnsTheMapByItsInitialFacing) {
+  // The robot starts at (1, 2) facing 0.3 rad in the world; the experience map has it facing
+  // pi/2 (OpenRatSLAM's default). A point 1 m ahead of the start in the map, (0, 1), is 1 m ahead
+  // in the world.
+  const sim::Pose2D start{1.0, 2.0, 0.3};
+  const sim::Pose2D ahead = MapToWorld(MapOrigin(start, std::numbers::pi / 2), 0.0, 1.0);
+  EXPECT_NEAR(ahead.x, 1.0 + std::cos(0.3), 1e-12);
+  EXPECT_NEAR(ahead.y, 2.0 + std::sin(0.3), 1e-12);
+  // Facing 0 in the map: the map frame is the start pose's own.
+  const sim::Pose2D same = MapToWorld(MapOrigin(start, 0.0), 1.0, 0.0);
+  EXPECT_NEAR(same.x, 1.0 + std::cos(0.3), 1e-12);
+  EXPECT_NEAR(same.y, 2.0 + std::sin(0.3), 1e-12);
 }
 
 // Ground truth of frames 0..9 on an L-shaped path, stamped 100 ms apart.
