@@ -16,17 +16,17 @@ sim::Pose2D MapOrigin(const sim::Pose2D& start, double initial_facing_rad) {
   return {start.x, start.y, WrapAngle(start.theta - initial_facing_rad)};
 }
 
-sim::Pose2D MapToWorld(const sim::Pose2D& start, double x, double y) {
-  const double c = std::cos(start.theta), s = std::sin(start.theta);
-  return {start.x + c * x - s * y, start.y + s * x + c * y, start.theta};
+sim::Pose2D MapToWorld(const sim::Pose2D& origin, double x, double y) {
+  const double c = std::cos(origin.theta), s = std::sin(origin.theta);
+  return {origin.x + c * x - s * y, origin.y + s * x + c * y, origin.theta};
 }
 
 namespace {
 
 // World point to the map frame.
-Eigen::Vector2d WorldToMap(const sim::Pose2D& start, const Eigen::Vector2d& p) {
-  const double c = std::cos(start.theta), s = std::sin(start.theta);
-  const double dx = p.x() - start.x, dy = p.y() - start.y;
+Eigen::Vector2d WorldToMap(const sim::Pose2D& origin, const Eigen::Vector2d& p) {
+  const double c = std::cos(origin.theta), s = std::sin(origin.theta);
+  const double dx = p.x() - origin.x, dy = p.y() - origin.y;
   return {c * dx + s * dy, -s * dx + c * dy};
 }
 
@@ -56,13 +56,13 @@ std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, cons
 }
 
 GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable,
-                                    const sim::Pose2D& start, const msg::OccupancyGrid& grid, double tolerance_m) {
+                                    const sim::Pose2D& map_origin, const msg::OccupancyGrid& grid, double tolerance_m) {
   if (grid.cells.size() != static_cast<size_t>(grid.width) * grid.height || !(grid.resolution_m > 0))
     throw std::invalid_argument("occupancy grid: cells do not match width x height, or bad resolution");
   GridComparison out;
   out.reachable_cells = reachable.size();
   for (const auto& cell : reachable) {
-    const int v = GridValueAt(grid, WorldToMap(start, world.CellCenter(cell)));
+    const int v = GridValueAt(grid, WorldToMap(map_origin, world.CellCenter(cell)));
     out.covered_cells += v >= 0 && v <= kFreeAtMost;
   }
   out.coverage = reachable.empty() ? 0.0 : static_cast<double>(out.covered_cells) / reachable.size();
@@ -75,7 +75,7 @@ GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const 
       const bool occupied = v >= kOccupiedAtLeast;
       if (!free && !occupied) continue;
       ++out.marked_cells;
-      const sim::Pose2D w = MapToWorld(start, grid.origin_x_m + (gx + 0.5) * grid.resolution_m,
+      const sim::Pose2D w = MapToWorld(map_origin, grid.origin_x_m + (gx + 0.5) * grid.resolution_m,
                                        grid.origin_y_m + (gy + 0.5) * grid.resolution_m);
       const Eigen::Vector2i centre = world.WorldToCell({w.x, w.y});
       bool agrees = false;

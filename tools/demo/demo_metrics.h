@@ -39,8 +39,8 @@ inline constexpr int kOccupiedAtLeast = 66; // occupied_thresh 0.65
 // exp_initial_em_deg).
 sim::Pose2D MapOrigin(const sim::Pose2D& start, double initial_facing_rad);
 
-// Map frame (whose pose in the world is `start`, the map origin) to world frame.
-sim::Pose2D MapToWorld(const sim::Pose2D& start, double x, double y);
+// Map frame (whose pose in the world is `origin`) to world frame.
+sim::Pose2D MapToWorld(const sim::Pose2D& origin, double x, double y);
 
 struct GridComparison {
   double coverage = 0.0;
@@ -57,7 +57,7 @@ std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, cons
                                                 double robot_radius_m);
 
 GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable,
-                                    const sim::Pose2D& start, const msg::OccupancyGrid& grid, double tolerance_m);
+                                    const sim::Pose2D& map_origin, const msg::OccupancyGrid& grid, double tolerance_m);
 
 struct LoopClosureCheck {
   uint32_t links = 0;
