@@ -352,6 +352,9 @@ int RunDemo(const DemoOptions& options) {
                        {"placed_by", map_to_world ? "rigid fit of the experiences to ground truth" : "start pose"},
                        {"at_start_pose", {{"coverage", grid_at_start->coverage},
                                           {"map_precision", grid_at_start->precision}}}};
+  // The map frame's pose in the world as the start pose and the map's initial facing put it (the
+  // placement of grid.at_start_pose), beside the one the rigid fit finds.
+  summary["map_origin"] = {{"x_m", map_origin.x}, {"y_m", map_origin.y}, {"theta_rad", map_origin.theta}};
   if (map_to_world)
     summary["grid_placement"] = {{"x_m", map_to_world->x}, {"y_m", map_to_world->y},
                                  {"theta_rad", map_to_world->theta}};
