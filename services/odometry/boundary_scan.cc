@@ -12,14 +12,14 @@ BoundaryScan BoundaryScan::FromPoints(std::vector<Eigen::Vector2d> points, doubl
   scan.points = std::move(points);
   const std::vector<Eigen::Vector2d>& p = scan.points;
   const size_t n = p.size();
-  scan.normals.resize(n);
+  scan.normals.assign(n, Eigen::Vector2d::Zero());
+  scan.ends_line.resize(n);
   for (size_t i = 0; i < n; ++i) {
     const bool prev = i > 0 && (p[i - 1] - p[i]).norm() <= neighbour_max_distance_m;
     const bool next = i + 1 < n && (p[i + 1] - p[i]).norm() <= neighbour_max_distance_m;
-    Eigen::Vector2d along = Eigen::Vector2d::Zero();
-    if (prev || next) along = (next ? p[i + 1] : p[i]) - (prev ? p[i - 1] : p[i]);
-    scan.normals[i] = along.norm() > 1e-9 ? Eigen::Vector2d(-along.y(), along.x()).normalized()
-                                          : Eigen::Vector2d(-p[i].normalized());
+    scan.ends_line[i] = !(prev && next);
+    const Eigen::Vector2d along = (next ? p[i + 1] : p[i]) - (prev ? p[i - 1] : p[i]);
+    if (along.norm() > 1e-9) scan.normals[i] = Eigen::Vector2d(-along.y(), along.x()).normalized();
   }
   return scan;
 }
@@ -53,7 +53,7 @@ Alignment AlignToScan(const BoundaryScan& reference, std::span<const Eigen::Vect
           found = true;
         }
       }
-      if (!found) continue;
+      if (!found || reference.ends_line[best]) continue;
       const Eigen::Vector2d& n = reference.normals[best];
       const double e = n.dot(q - ref[best]);
       const Eigen::Vector3d j(n.x(), n.y(), n.dot(Eigen::Vector2d(-s * p.x() - c * p.y(), c * p.x() - s * p.y())));

@@ -11,7 +11,8 @@
 //
 // Each frame's boundary points are registered to the key frame's by point-to-line ICP in the
 // plane (x forward, y left, theta counter-clockwise): nearest key point within
-// max_pair_distance_m, the line through it and its profile neighbours, Gauss-Newton on
+// max_pair_distance_m, the line through it and its profile neighbours (no pair where that point
+// ends its line: boundary_scan.h), Gauss-Newton on
 // (x, y, theta), pairs weighted by 1 / (r_a r_b)^2 (a row's floor footprint grows with r^2), with
 // priors that keep the robot from moving sideways and the turn near the prior's. ICP starts from
 // up to three seeds (the prior, the previous frame's motion, the last forward step with the

@@ -46,6 +46,43 @@ TEST(BoundaryScanTest, NormalsAreThoseOfTheWalls) {
   }
 }
 
+TEST(BoundaryScanTest, MarksTheEndsOfEachLineAndLonePoints) {
+  // A line of five points, a lone point, a line of three (neighbours within 0.12 m).
+  const std::vector<Eigen::Vector2d> points = {{1.0, -0.1}, {1.0, -0.05}, {1.0, 0.0}, {1.0, 0.05}, {1.0, 0.1},
+                                               {1.5, 0.6},  {2.0, 1.5},   {2.05, 1.5}, {2.1, 1.5}};
+  const BoundaryScan scan = BoundaryScan::FromPoints(points);
+  const std::vector<bool> ends = {true, false, false, false, true, true, true, false, true};
+  EXPECT_EQ(scan.ends_line, ends);
+  EXPECT_EQ(scan.normals[5], Eigen::Vector2d::Zero());  // the lone point has no line
+  EXPECT_NEAR(std::abs(scan.normals[0].x()), 1.0, 1e-9);  // an end keeps its line's normal
+  EXPECT_NEAR(std::abs(scan.normals[8].y()), 1.0, 1e-9);
+}
+
+// Driving 0.3 m towards a short wall (x = 2, |y| <= 0.3) with a far wall to the left (y = 1.2)
+// sampled sparsely (0.2 m apart: a far boundary's image rows), where the reference view ends at
+// range 2.6 m and the view from 0.3 m ahead reaches 0.3 m farther along the far wall.
+std::vector<Eigen::Vector2d> ShortWallAndFarSamples(double x, double sample_phase) {
+  std::vector<Eigen::Vector2d> out;
+  for (double y = -0.3; y <= 0.3 + 1e-9; y += 0.02) out.emplace_back(2.0 - x, y);
+  for (double wx = 1.4 + sample_phase; (Eigen::Vector2d(wx - x, 1.2)).norm() <= 2.6; wx += 0.2)
+    out.emplace_back(wx - x, 1.2);
+  return out;
+}
+
+TEST(BoundaryScanTest, PointsSeenBeyondTheReferencesLastOneDoNotPullTheMoveShort) {
+  const BoundaryScan reference = BoundaryScan::FromPoints(ShortWallAndFarSamples(0.0, 0.0));
+  const std::vector<Eigen::Vector2d> points = ShortWallAndFarSamples(0.3, 0.1);
+  AlignmentOptions options;
+  options.min_pairs = 6;
+  options.iterations = 30;
+  options.lateral_prior = 10.0;
+  const Eigen::Vector3d prior(0.25, 0.0, 0.0);
+  const Alignment a = AlignToScan(reference, points, prior, prior, options);
+  ASSERT_TRUE(a.ok);
+  EXPECT_NEAR(a.pose.x(), 0.3, 1e-3);
+  EXPECT_NEAR(a.pose.y(), 0.0, 1e-3);
+}
+
 TEST(BoundaryScanTest, AlignsAShiftedAndTurnedViewOfACorner) {
   const BoundaryScan reference = BoundaryScan::FromPoints(CornerView(0.0, 0.0, 0.5));
   const Eigen::Vector3d truth(0.06, -0.03, 0.05);  // the second view's pose in the first's frame
