@@ -67,11 +67,12 @@ Alignment FloorOdometry::Register(std::span<const Eigen::Vector2d> points, const
   return AlignToScan(key_, points, predicted, prior, options);
 }
 
-PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, const PlanarMotion& given_prior) {
+PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, const PlanarMotion& given_prior,
+                                   bool camera_moves) {
   if (!std::isfinite(given_prior.dx) || !std::isfinite(given_prior.dy) || !std::isfinite(given_prior.dtheta))
     throw std::invalid_argument("FloorOdometry: the prior motion is not finite");
   const bool straight = std::abs(given_prior.dtheta) < config_.straight_max_turn_rad;
-  bool moving = given_prior.dx != 0.0;
+  bool moving = given_prior.dx != 0.0 || camera_moves;
   if (moving) {
     still_run_ = 0;
   } else if (was_moving_ && straight && still_run_ < config_.coast_still_frames) {

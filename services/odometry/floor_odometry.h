@@ -31,6 +31,12 @@
 // half the coasting step): driving straight past a plain wall,
 // the column profiles can change less than their noise floor for a frame or two (on a demo path,
 // 360 of 3,199 moving frames read dx 0 and were not registered: 8.9 m of 79.7 m lost).
+// The caller may say more: camera_moves, the images changing by more than a still camera's noise
+// although too little for a speed (odometry_node_config.h moving_difference), makes a still
+// prior moving for as long as it lasts, and without it a still prior is still (with
+// coast_still_frames 0). Across open floor, with the walls 3 m and more away, the profiles read
+// no speed for long stretches; on a recorded demo path 95% of such driving frames changed more
+// than 0.001, 95% of standing frames less than 0.0005.
 // A frame is not registered (the seeded prior is returned, measured = false) when
 // either frame has fewer than min_points points, too few pairs survive, or the geometry leaves a
 // direction unconstrained (a corridor's parallel walls say nothing about motion along them):
@@ -123,7 +129,10 @@ class FloorOdometry {
   // beyond max_range_m are dropped here). prior: the motion expected from other cues (the
   // column-shift rotation, the previous speed); it seeds the registration and is returned when
   // the frame cannot be registered. Non-finite points or prior throw std::invalid_argument.
-  PlanarMotion Update(std::span<const Eigen::Vector2d> boundary, const PlanarMotion& prior);
+  // camera_moves: the images change more than a still camera's noise although too little for the
+  // prior to read a speed (dx 0): such a frame is taken as moving (see the header comment).
+  PlanarMotion Update(std::span<const Eigen::Vector2d> boundary, const PlanarMotion& prior,
+                      bool camera_moves = false);
 
   void Reset();
   const FloorOdometryConfig& config() const { return config_; }

@@ -149,7 +149,9 @@ class OdometryNode::Impl {
     PlanarMotion prior;
     prior.dx = velocity.vtrans * dt_s;
     prior.dtheta = velocity.vrot * dt_s;
-    const PlanarMotion motion = floor_->Update(boundary_points_, prior);
+    const double moving_difference = config_.floor.moving_difference;
+    const PlanarMotion motion = floor_->Update(
+        boundary_points_, prior, moving_difference > 0 && velocity.speed_difference > moving_difference);
     const std::optional<double> wall_direction = WallDirection(boundary_points_, config_.floor.wall_direction);
     if (dt_s <= 0) return wall_direction;
     const double turn_in_place = config_.visual.turn_in_place_vrot_radps;

@@ -22,6 +22,11 @@ struct FloorOdometryNodeConfig {
   // short (-5.0 rad over 794 rad turned) and 51 m of forward motion in place, the profiles
   // -0.36 rad and none.
   bool turns_from_profiles = true;
+  // A frame whose speed profile differs from the previous one's by more than this (the
+  // speed_difference of visual_odometry.h) shows a moving camera even when the difference is
+  // below the speed's noise floor (vtrans 0): the floor odometry then takes it as moving
+  // (FloorOdometry::Update's camera_moves). 0 = only a speed says the camera moves.
+  double moving_difference = 0.0;
   occupancy::ObstacleProfileConfig boundary;
   FloorOdometryConfig registration;
   WallDirectionConfig wall_direction;
@@ -31,6 +36,8 @@ struct FloorOdometryNodeConfig {
     v("enabled", enabled, "register floor-boundary points for metric motion (needs bgr8 images)");
     v("turns_from_profiles", turns_from_profiles,
       "frames the column profiles call a turn on the spot keep the profiles' motion");
+    v("moving_difference", moving_difference,
+      "speed-profile difference above which a frame with no readable speed is taken as moving (0 = off)");
     boundary.VisitFields(v);
     registration.VisitFields(v);
     v("wall_direction", wall_direction,
@@ -38,6 +45,7 @@ struct FloorOdometryNodeConfig {
   }
   void Validate() const {
     if (!enabled) return;
+    Require(moving_difference >= 0, "moving_difference", "must be >= 0");
     boundary.Validate();
     registration.Validate();
     ValidateNested(wall_direction, "wall_direction");

@@ -127,6 +127,30 @@ TEST(FloorOdometryTest, CoastsAtTheRegisteredSpeedWhileMovingAndThroughAShortSti
   EXPECT_DOUBLE_EQ(odometry.Update(none, {}).dx, 0.0);
 }
 
+TEST(FloorOdometryTest, ACameraThatMovesTooLittleForASpeedKeepsCoastingAndAStillOneStops) {
+  FloorOdometryConfig config = Config();
+  config.coast_still_frames = 0;
+  FloorOdometry odometry(config);
+  PlanarMotion moving;
+  moving.dx = 0.001;
+  odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
+  const std::vector<double> steps(5, 0.03);
+  DriveRegistered(odometry, -0.2, steps);
+  // Open floor: nothing to register, the profiles read no speed, but the images still change.
+  const std::vector<Eigen::Vector2d> none;
+  for (int i = 0; i < 20; ++i) {
+    const PlanarMotion m = odometry.Update(none, {}, /*camera_moves=*/true);
+    EXPECT_FALSE(m.measured);
+    EXPECT_NEAR(m.dx, 0.03, 1e-3) << "frame " << i;
+  }
+  // The images stop changing: the robot stands.
+  EXPECT_DOUBLE_EQ(odometry.Update(none, {}, false).dx, 0.0);
+  // A turn whose images change is not a forward move.
+  PlanarMotion turning;
+  turning.dtheta = 0.05;
+  EXPECT_DOUBLE_EQ(odometry.Update(none, turning, true).dx, 0.0);
+}
+
 TEST(FloorOdometryTest, OneOddRegisteredStepDoesNotSetTheCoastingSpeed) {
   FloorOdometry odometry(Config());
   PlanarMotion moving;
