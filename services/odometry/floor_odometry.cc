@@ -29,7 +29,10 @@ PlanarMotion Between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 }  // namespace
 
-FloorOdometry::FloorOdometry(FloorOdometryConfig config) : config_(std::move(config)) { config_.Validate(); }
+FloorOdometry::FloorOdometry(FloorOdometryConfig config) : config_(std::move(config)) {
+  config_.Validate();
+  moving_dx_.resize(config_.coast_speed_steps);
+}
 
 void FloorOdometry::Reset() {
   has_key_ = false;
@@ -43,8 +46,8 @@ void FloorOdometry::Reset() {
 }
 
 double FloorOdometry::CoastStep() const {
-  const int n = static_cast<int>(std::min<uint64_t>(moving_dx_count_, kCoastSteps));
-  std::array<double, kCoastSteps> steps = moving_dx_;
+  const auto n = static_cast<ptrdiff_t>(std::min<uint64_t>(moving_dx_count_, moving_dx_.size()));
+  std::vector<double> steps(moving_dx_.begin(), moving_dx_.begin() + n);
   std::nth_element(steps.begin(), steps.begin() + n / 2, steps.begin() + n);
   return steps[n / 2];
 }
@@ -135,7 +138,7 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
     if (still_run_ > 0 && std::abs(out.dx) < 0.5 * coast_dx) was_moving_ = false;
     // The speed comes from frames the prior itself calls moving, straight (a turn's step is no speed).
     if (given_prior.dx != 0.0 && std::abs(out.dtheta) < config_.straight_max_turn_rad) {
-      moving_dx_[moving_dx_count_ % kCoastSteps] = out.dx;
+      moving_dx_[moving_dx_count_ % moving_dx_.size()] = out.dx;
       ++moving_dx_count_;
       frames_since_moving_dx_ = 0;
     }

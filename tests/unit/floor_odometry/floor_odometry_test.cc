@@ -162,6 +162,21 @@ TEST(FloorOdometryTest, OneOddRegisteredStepDoesNotSetTheCoastingSpeed) {
   EXPECT_NEAR(odometry.Update(none, moving).dx, 0.03, 1e-3);  // the median, not the latest
 }
 
+TEST(FloorOdometryTest, TheCoastingSpeedIsTheMedianOfAsManyStepsAsConfigured) {
+  const std::vector<double> steps = {0.03, 0.03, 0.03, 0.03, 0.03, 0.02, 0.02, 0.02};
+  const std::vector<Eigen::Vector2d> none;
+  PlanarMotion moving;
+  moving.dx = 0.001;
+  for (const auto& [window, speed] : {std::pair{15, 0.03}, std::pair{3, 0.02}}) {
+    FloorOdometryConfig config = Config();
+    config.coast_speed_steps = window;
+    FloorOdometry odometry(config);
+    odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
+    DriveRegistered(odometry, -0.2, steps);
+    EXPECT_NEAR(odometry.Update(none, moving).dx, speed, 1e-3) << "window " << window;
+  }
+}
+
 TEST(FloorOdometryTest, ATurnsRegisteredStepsDoNotSetTheCoastingSpeed) {
   FloorOdometry odometry(Config());
   PlanarMotion moving;
