@@ -36,7 +36,7 @@
 // prior moving for as long as it lasts, and without it a still prior is still (with
 // coast_still_frames 0). Across open floor, with the walls 3 m and more away, the profiles read
 // no speed for long stretches; on a recorded demo path 95% of such driving frames changed more
-// than 0.001, 95% of standing frames less than 0.0005.
+// than 0.00098, 95% of standing frames less than 0.00051.
 // A frame is not registered (the seeded prior is returned, measured = false) when
 // either frame has fewer than min_points points, too few pairs survive, or the geometry leaves a
 // direction unconstrained (a corridor's parallel walls say nothing about motion along them):

@@ -91,11 +91,19 @@ TEST(FloorOdometryTest, ParallelWallsLeaveTheMotionToThePrior) {
   EXPECT_DOUBLE_EQ(m.dx, 0.02);
 }
 
-// Drives straight along x in the box room with a prior that says "moving" (the column profiles
-// see motion, not its speed), registering each step; returns the robot's final x.
-double DriveRegistered(FloorOdometry& odometry, double x, std::span<const double> steps) {
+// A prior that says "moving": the column profiles see motion, not its speed.
+PlanarMotion MovingPrior() {
   PlanarMotion moving;
   moving.dx = 0.001;
+  return moving;
+}
+
+// From x = -0.2 in the box room, facing along x: a first frame, then straight steps with a moving
+// prior, each registered; returns the robot's final x.
+double DriveRegistered(FloorOdometry& odometry, std::span<const double> steps) {
+  const PlanarMotion moving = MovingPrior();
+  double x = -0.2;
+  odometry.Update(BoxRoomView(x, 0.0, 0.0, 1.5, 1.0), moving);
   for (double step : steps) {
     x += step;
     EXPECT_TRUE(odometry.Update(BoxRoomView(x, 0.0, 0.0, 1.5, 1.0), moving).measured) << "step " << step;
@@ -105,11 +113,9 @@ double DriveRegistered(FloorOdometry& odometry, double x, std::span<const double
 
 TEST(FloorOdometryTest, CoastsAtTheRegisteredSpeedWhileMovingAndThroughAShortStillSpell) {
   FloorOdometry odometry(Config());  // coast_still_frames 2
-  PlanarMotion moving;
-  moving.dx = 0.001;
-  odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
+  const PlanarMotion moving = MovingPrior();
   const std::vector<double> steps(5, 0.03);
-  DriveRegistered(odometry, -0.2, steps);
+  DriveRegistered(odometry, steps);
   // Nothing to register (no points): the registered speed stands in while the prior says moving ...
   const std::vector<Eigen::Vector2d> none;
   const PlanarMotion coasting = odometry.Update(none, moving);
@@ -131,11 +137,8 @@ TEST(FloorOdometryTest, ACameraThatMovesTooLittleForASpeedKeepsCoastingAndAStill
   FloorOdometryConfig config = Config();
   config.coast_still_frames = 0;
   FloorOdometry odometry(config);
-  PlanarMotion moving;
-  moving.dx = 0.001;
-  odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
   const std::vector<double> steps(5, 0.03);
-  DriveRegistered(odometry, -0.2, steps);
+  DriveRegistered(odometry, steps);
   // Open floor: nothing to register, the profiles read no speed, but the images still change.
   const std::vector<Eigen::Vector2d> none;
   for (int i = 0; i < 20; ++i) {
@@ -153,11 +156,9 @@ TEST(FloorOdometryTest, ACameraThatMovesTooLittleForASpeedKeepsCoastingAndAStill
 
 TEST(FloorOdometryTest, OneOddRegisteredStepDoesNotSetTheCoastingSpeed) {
   FloorOdometry odometry(Config());
-  PlanarMotion moving;
-  moving.dx = 0.001;
-  odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
+  const PlanarMotion moving = MovingPrior();
   const std::vector<double> steps = {0.03, 0.03, 0.03, 0.03, 0.06};  // the last registers 0.06
-  DriveRegistered(odometry, -0.2, steps);
+  DriveRegistered(odometry, steps);
   const std::vector<Eigen::Vector2d> none;
   EXPECT_NEAR(odometry.Update(none, moving).dx, 0.03, 1e-3);  // the median, not the latest
 }
@@ -165,25 +166,20 @@ TEST(FloorOdometryTest, OneOddRegisteredStepDoesNotSetTheCoastingSpeed) {
 TEST(FloorOdometryTest, TheCoastingSpeedIsTheMedianOfAsManyStepsAsConfigured) {
   const std::vector<double> steps = {0.03, 0.03, 0.03, 0.03, 0.03, 0.02, 0.02, 0.02};
   const std::vector<Eigen::Vector2d> none;
-  PlanarMotion moving;
-  moving.dx = 0.001;
   for (const auto& [window, speed] : {std::pair{15, 0.03}, std::pair{3, 0.02}}) {
     FloorOdometryConfig config = Config();
     config.coast_speed_steps = window;
     FloorOdometry odometry(config);
-    odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
-    DriveRegistered(odometry, -0.2, steps);
-    EXPECT_NEAR(odometry.Update(none, moving).dx, speed, 1e-3) << "window " << window;
+    DriveRegistered(odometry, steps);
+    EXPECT_NEAR(odometry.Update(none, MovingPrior()).dx, speed, 1e-3) << "window " << window;
   }
 }
 
 TEST(FloorOdometryTest, ATurnsRegisteredStepsDoNotSetTheCoastingSpeed) {
   FloorOdometry odometry(Config());
-  PlanarMotion moving;
-  moving.dx = 0.001;
-  odometry.Update(BoxRoomView(-0.2, 0.0, 0.0, 1.5, 1.0), moving);
+  const PlanarMotion moving = MovingPrior();
   const std::vector<double> steps(4, 0.03);
-  const double x = DriveRegistered(odometry, -0.2, steps);
+  const double x = DriveRegistered(odometry, steps);
   // Five frames turning on the spot that the profiles also call moving: registered, no forward step.
   PlanarMotion turning = moving;
   turning.dtheta = 0.02;
