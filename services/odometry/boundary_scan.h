@@ -14,7 +14,7 @@
 // view sees beyond the reference's last one (past its range, its field of view, a far wall's
 // sparse samples) pairs with that last point although they are different places, pulling the
 // motion short. Four recorded demo paths rendered again through the floor odometry: distance
-// 0.908-0.937 -> 0.935-0.963 of the truth; the maps their pose cells made, replayed on it (see
+// 0.892-0.922 -> 0.935-0.963 of the truth; the maps their pose cells made, replayed on it (see
 // deploy/config/demo.yaml), are larger and closer to the truth. Priors, each
 // scaled by the sum of pair weights so they mean the same for few or many points, hold the
 // solution near a prior pose where the points say little: sideways (its left axis) and in turn.

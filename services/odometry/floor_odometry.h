@@ -157,9 +157,9 @@ class FloorOdometry {
   // The median of the last coast_speed_steps registered forward steps (see the header comment).
   double CoastStep() const;
 
-  std::vector<double> moving_dx_;  // ring of registered forward steps of moving frames (coast_speed_steps)
-  uint64_t moving_dx_count_ = 0;                 // how many were registered (all time)
-  int frames_since_moving_dx_ = -1;              // since the newest; -1: none yet
+  std::vector<double> moving_dx_;     // ring of registered forward steps of moving frames (coast_speed_steps)
+  uint64_t moving_dx_count_ = 0;      // how many were registered (all time)
+  int frames_since_moving_dx_ = -1;   // since the newest; -1: none yet
   bool was_moving_ = false;  // the previous frame was taken as moving
   int still_run_ = 0;        // still priors in a row taken as moving
 };
