@@ -78,10 +78,21 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   EXPECT_LE(summary["grid"]["at_start_pose"]["coverage"].get<double>(), 1.0);
   EXPECT_LE(summary["grid"]["at_start_pose"]["map_precision"].get<double>(), 1.0);
   EXPECT_TRUE(summary["grid_placement"]["theta_rad"].is_number());
-  // The start pose places the map turned by its initial facing (OpenRatSLAM's 90 degrees): the
-  // rigid fit of a short run's map finds nearly the same turn (a quarter turn off before session 16).
-  const double turn = summary["grid_placement"]["theta_rad"].get<double>() - summary["map_origin"]["theta_rad"].get<double>();
-  EXPECT_LT(std::abs(std::remainder(turn, 2 * std::numbers::pi)), 0.6) << summary.dump(2);
+  // The start pose places the map frame turned by the experience map's initial facing (the demo
+  // keeps OpenRatSLAM's 90 degrees; until session 16 it was left out, a quarter turn off) ...
+  const std::vector<double> start = summary["start_pose"].get<std::vector<double>>();
+  ASSERT_EQ(start.size(), 3u);
+  EXPECT_DOUBLE_EQ(summary["map_origin"]["x_m"].get<double>(), start[0]);
+  EXPECT_DOUBLE_EQ(summary["map_origin"]["y_m"].get<double>(), start[1]);
+  const double facing = start[2] - summary["map_origin"]["theta_rad"].get<double>();
+  EXPECT_NEAR(std::remainder(facing - std::numbers::pi / 2, 2 * std::numbers::pi), 0.0, 1e-9);
+  // ... and where the map is better than the odometry, the rigid fit of the map to the truth finds
+  // nearly the same turn. (A short run whose map is worse, its heading held to walls' axes fixed
+  // 0.28 rad off, was fitted 1.37 rad away: its shape, not its frame, is wrong.)
+  if (summary["ate_m"].get<double>() < summary["ate_odometry_m"].get<double>()) {
+    const double turn = summary["grid_placement"]["theta_rad"].get<double>() - summary["map_origin"]["theta_rad"].get<double>();
+    EXPECT_LT(std::abs(std::remainder(turn, 2 * std::numbers::pi)), 0.6) << summary.dump(2);
+  }
   if (summary["loop_closure_precision"].is_number()) {
     EXPECT_GE(summary["loop_closure_precision"].get<double>(), 0.0);
     EXPECT_LE(summary["loop_closure_precision"].get<double>(), 1.0);
