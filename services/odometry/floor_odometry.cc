@@ -38,6 +38,7 @@ void FloorOdometry::Reset() {
   has_key_ = false;
   last_registered_ = false;
   moving_dx_count_ = 0;
+  coast_step_ = 0.0;
   frames_since_moving_dx_ = -1;
   was_moving_ = false;
   still_run_ = 0;
@@ -45,11 +46,14 @@ void FloorOdometry::Reset() {
   key_to_robot_.setZero();
 }
 
-double FloorOdometry::CoastStep() const {
+void FloorOdometry::RecordMovingStep(double dx) {
+  moving_dx_[moving_dx_count_ % moving_dx_.size()] = dx;
+  ++moving_dx_count_;
+  frames_since_moving_dx_ = 0;
   const auto n = static_cast<ptrdiff_t>(std::min<uint64_t>(moving_dx_count_, moving_dx_.size()));
   std::vector<double> steps(moving_dx_.begin(), moving_dx_.begin() + n);
-  std::nth_element(steps.begin(), steps.begin() + n / 2, steps.begin() + n);
-  return steps[n / 2];
+  std::nth_element(steps.begin(), steps.begin() + n / 2, steps.end());
+  coast_step_ = steps[n / 2];
 }
 
 void FloorOdometry::MakeKeyFrame(std::vector<Eigen::Vector2d>&& points) {
@@ -86,7 +90,7 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
   PlanarMotion prior = given_prior;
   if (frames_since_moving_dx_ >= 0) ++frames_since_moving_dx_;
   const bool can_coast = frames_since_moving_dx_ >= 0 && frames_since_moving_dx_ <= config_.coast_frames;
-  const double coast_dx = frames_since_moving_dx_ >= 0 ? CoastStep() : 0.0;
+  const double coast_dx = frames_since_moving_dx_ >= 0 ? coast_step_ : 0.0;
   if (moving && straight && can_coast) prior.dx = coast_dx;
   std::vector<Eigen::Vector2d> points;
   points.reserve(boundary.size());
@@ -137,11 +141,7 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
     // A still prior taken as moving that registers standing still ends the motion.
     if (still_run_ > 0 && std::abs(out.dx) < 0.5 * coast_dx) was_moving_ = false;
     // The speed comes from frames the prior itself calls moving, straight (a turn's step is no speed).
-    if (given_prior.dx != 0.0 && std::abs(out.dtheta) < config_.straight_max_turn_rad) {
-      moving_dx_[moving_dx_count_ % moving_dx_.size()] = out.dx;
-      ++moving_dx_count_;
-      frames_since_moving_dx_ = 0;
-    }
+    if (given_prior.dx != 0.0 && std::abs(out.dtheta) < config_.straight_max_turn_rad) RecordMovingStep(out.dx);
   } else {
     key_to_robot_ = Compose(previous, prior.dx, prior.dy, prior.dtheta);
   }

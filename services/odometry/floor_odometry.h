@@ -154,11 +154,13 @@ class FloorOdometry {
   Eigen::Vector3d key_to_robot_ = Eigen::Vector3d::Zero();  // robot pose in the key frame (x, y, theta)
   PlanarMotion last_motion_;     // the previous frame's, when it was registered
   bool last_registered_ = false;
-  // The median of the last coast_speed_steps registered forward steps (see the header comment).
-  double CoastStep() const;
+  // Keeps a registered forward step and the median of the last coast_speed_steps of them, the
+  // coasting step (see the header comment): once per registered step, not every frame.
+  void RecordMovingStep(double dx);
 
   std::vector<double> moving_dx_;     // ring of registered forward steps of moving frames (coast_speed_steps)
   uint64_t moving_dx_count_ = 0;      // how many were registered (all time)
+  double coast_step_ = 0.0;           // their median (last coast_speed_steps)
   int frames_since_moving_dx_ = -1;   // since the newest; -1: none yet
   bool was_moving_ = false;  // the previous frame was taken as moving
   int still_run_ = 0;        // still priors in a row taken as moving
