@@ -17,6 +17,9 @@ struct ExperienceAction {
   uint32_t from_experience_id = kNoExperience;  // current experience before the action
   uint32_t template_id = 0;
   double relative_angle_rad = 0.0;  // view orientation offset, added to the facing on link/set
+  // link/set: where the robot stands in the experience's frame (x forward, y left), as measured
+  // by registering the two views' floor boundaries; zero: on it (OpenRatSLAM).
+  double offset_x_m = 0.0, offset_y_m = 0.0;
   double pc_x = 0.0, pc_y = 0.0, pc_th = 0.0;  // pose-cell position of experience_id
   uint64_t sequence = 0;
 };

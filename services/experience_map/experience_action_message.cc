@@ -22,6 +22,8 @@ ExperienceAction FromActionMessage(const msg::PoseCellAction& m) {
   a.from_experience_id = m.from_experience_id;
   a.template_id = m.template_id;
   a.relative_angle_rad = m.relative_angle_rad;
+  a.offset_x_m = m.offset_x_m;
+  a.offset_y_m = m.offset_y_m;
   a.pc_x = m.pc_x;
   a.pc_y = m.pc_y;
   a.pc_th = m.pc_th;

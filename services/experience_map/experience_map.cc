@@ -67,13 +67,18 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
   accum_facing_ = WrapAngle(accum_facing_ - config_.exp_manhattan_gain * offset);
 }
 
-ExperienceMap::Observation ExperienceMap::ObservedFromCurrent(double relative_angle_rad) const {
+ExperienceMap::Observation ExperienceMap::ObservedFromCurrent(const ExperienceAction& a) const {
   // The robot faces relative_angle_rad from the experience it recognises (SetCurrent), so that
   // experience faces accum_facing_ - relative_angle_rad. OpenRatSLAM adds the angle here and in
-  // on_set_experience alike, which puts twice the view's offset into every link it closes.
+  // on_set_experience alike, which puts twice the view's offset into every link it closes. The
+  // robot stands at (offset_x_m, offset_y_m) in that experience's frame, so the experience is
+  // that far behind it.
   const Experience& cur = experiences_[current_];
-  return {std::hypot(accum_x_, accum_y_), WrapAngle(std::atan2(accum_y_, accum_x_) - cur.th_rad),
-          WrapAngle(accum_facing_ - relative_angle_rad - cur.th_rad), accum_time_};
+  const double facing = accum_facing_ - a.relative_angle_rad;
+  const double c = std::cos(facing), s = std::sin(facing);
+  const double x = accum_x_ - (c * a.offset_x_m - s * a.offset_y_m);
+  const double y = accum_y_ - (s * a.offset_x_m + c * a.offset_y_m);
+  return {std::hypot(x, y), WrapAngle(std::atan2(y, x) - cur.th_rad), WrapAngle(facing - cur.th_rad), accum_time_};
 }
 
 int ExperienceMap::FindLink(uint32_t from, uint32_t to) const {
@@ -117,16 +122,20 @@ void ExperienceMap::AverageInto(Link& link, const Observation& obs, bool reverse
   link.traversals += 1;
 }
 
-void ExperienceMap::SetCurrent(uint32_t id, double relative_angle_rad) {
+void ExperienceMap::SetCurrent(uint32_t id, double relative_angle_rad, double offset_x_m, double offset_y_m) {
   if (has_current_ && id == current_) return;  // OpenRatSLAM keeps accumulating then
   current_ = id;
   has_current_ = true;
-  accum_x_ = accum_y_ = accum_time_ = 0.0;
-  accum_facing_ = WrapAngle(experiences_[id].th_rad + relative_angle_rad);
+  const double th = experiences_[id].th_rad, c = std::cos(th), s = std::sin(th);
+  accum_x_ = c * offset_x_m - s * offset_y_m;
+  accum_y_ = s * offset_x_m + c * offset_y_m;
+  accum_time_ = 0.0;
+  accum_facing_ = WrapAngle(th + relative_angle_rad);
 }
 
 void ExperienceMap::ValidateIds(const ExperienceAction& a) const {
   if (!std::isfinite(a.relative_angle_rad)) Reject("relative angle is not finite");
+  if (!std::isfinite(a.offset_x_m) || !std::isfinite(a.offset_y_m)) Reject("view offset is not finite");
   const uint32_t n = static_cast<uint32_t>(experiences_.size());
   switch (a.kind) {
     case ExperienceAction::Kind::kNone:
@@ -184,15 +193,15 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       experiences_.push_back(e);
       links_from_.emplace_back();
       links_to_.emplace_back();
-      if (has_current_) AddLink(current_, e.id, ObservedFromCurrent(0.0));
-      SetCurrent(e.id, 0.0);
+      if (has_current_) AddLink(current_, e.id, ObservedFromCurrent({}));
+      SetCurrent(e.id, 0.0, 0.0, 0.0);
       break;
     }
     case ExperienceAction::Kind::kLink:
     case ExperienceAction::Kind::kSet: {
       const uint32_t to = a.experience_id;
       if (to == current_) break;
-      const Observation o = ObservedFromCurrent(a.relative_angle_rad);
+      const Observation o = ObservedFromCurrent(a);
       const bool link_kind = a.kind == ExperienceAction::Kind::kLink;
       bool changed = false;
       if (link_kind || config_.exp_average_repeated_links) {
@@ -213,15 +222,15 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         if (!config_.exp_graph_optimisation) SeedLocalRegion(current_, to);
       }
       const Pose2 dead_reckoned = RobotPose();
-      SetCurrent(to, a.relative_angle_rad);
+      SetCurrent(to, a.relative_angle_rad, a.offset_x_m, a.offset_y_m);
       if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
         accum_facing_ = WrapAngle(dead_reckoned.th_rad +
                                   config_.exp_heading_correction * WrapAngle(accum_facing_ - dead_reckoned.th_rad));
       }
       if (config_.exp_position_correction < 1.0) {  // at 1 the robot is on the experience (OpenRatSLAM)
         const double keep = 1.0 - config_.exp_position_correction;
-        accum_x_ = keep * (dead_reckoned.x_m - experiences_[to].x_m);
-        accum_y_ = keep * (dead_reckoned.y_m - experiences_[to].y_m);
+        accum_x_ = keep * (dead_reckoned.x_m - experiences_[to].x_m) + config_.exp_position_correction * accum_x_;
+        accum_y_ = keep * (dead_reckoned.y_m - experiences_[to].y_m) + config_.exp_position_correction * accum_y_;
       }
       break;
     }

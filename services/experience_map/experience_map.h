@@ -107,7 +107,7 @@ class ExperienceMap {
   // with kind kNone when the pose cells emitted nothing). Throws std::invalid_argument, with the
   // map unchanged, when ids are inconsistent: kCreate of an id other than the next dense id or
   // from an experience other than the current one; kLink/kSet of unknown ids or from an
-  // experience other than the current one; non-finite angle.
+  // experience other than the current one; non-finite angle or offset.
   void Apply(const ExperienceAction& action);
 
   // One frame's correction budget only (Apply calls it). Returns link relaxations done.
@@ -152,11 +152,11 @@ class ExperienceMap {
   struct Observation {
     double d, heading, facing, time;
   };
-  Observation ObservedFromCurrent(double relative_angle_rad) const;
+  Observation ObservedFromCurrent(const ExperienceAction& a) const;
   void AddLink(uint32_t from, uint32_t to, const Observation& o);
   void AverageInto(Link& link, const Observation& o, bool reversed);
   int FindLink(uint32_t from, uint32_t to) const;
-  void SetCurrent(uint32_t id, double relative_angle_rad);
+  void SetCurrent(uint32_t id, double relative_angle_rad, double offset_x_m, double offset_y_m);
   // Relaxes link links_[index] (000 eq. 3); returns the largest change it made.
   double RelaxLink(uint32_t index);
   void SeedLocalRegion(uint32_t a, uint32_t b);

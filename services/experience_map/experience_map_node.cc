@@ -103,6 +103,7 @@ class ExperienceMapNode::Mapper {
     if (!std::isfinite(a.pc_x) || !std::isfinite(a.pc_y) || !std::isfinite(a.pc_th))
       return "pose-cell position is not finite";
     if (!std::isfinite(a.relative_angle_rad)) return "relative angle is not finite";
+    if (!std::isfinite(a.offset_x_m) || !std::isfinite(a.offset_y_m)) return "view offset is not finite";
     if (a.wall_seen && !std::isfinite(a.wall_direction_rad)) return "wall direction is not finite";
     return "";
   }

@@ -24,6 +24,8 @@ msg::PoseCellAction ToActionMessage(const Action& action, uint64_t action_seq, d
   out.from_experience_id = action.from_experience_id;
   out.template_id = action.template_id;
   out.relative_angle_rad = action.relative_angle_rad;
+  out.offset_x_m = action.offset_x_m;
+  out.offset_y_m = action.offset_y_m;
   out.pc_x = static_cast<float>(action.pc_x);
   out.pc_y = static_cast<float>(action.pc_y);
   out.pc_th = static_cast<float>(action.pc_th);

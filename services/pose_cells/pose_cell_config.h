@@ -30,12 +30,16 @@ struct PoseCellConfig {
   // exp_boundary_max_offset_m, make a new experience instead. Needs the odometry's floor
   // boundary (odometry/velocity, floor_odometry); an experience or frame without one (adopted
   // from the map after a restart, a frame without odometry) is not checked. The service keeps
-  // the boundaries only while the check is on.
+  // the boundaries only while the check or exp_boundary_offset is on.
   bool exp_boundary_check = false;
   int exp_boundary_min_age_frames = 500;
   int exp_boundary_min_points = 8;
   double exp_boundary_max_residual_m = 0.05;
   double exp_boundary_max_offset_m = 0.7;
+  // Not OpenRatSLAM's: a link or set to an experience whose floor boundary registers with the
+  // view's as the check requires (whatever the experience's age) carries where the robot stands
+  // in that experience's frame (Action::offset_x_m, offset_y_m); OpenRatSLAM puts the robot on it.
+  bool exp_boundary_offset = false;
 
   template <class V>
   void VisitFields(V& v) {
@@ -65,6 +69,8 @@ struct PoseCellConfig {
       "a checked link needs the registered boundaries' median residual under this (m)");
     v("exp_boundary_max_offset_m", exp_boundary_max_offset_m,
       "a checked link needs the registered offset between the two views under this (m)");
+    v("exp_boundary_offset", exp_boundary_offset,
+      "a link or set carries the robot's offset from the experience, from the registered floor boundaries");
   }
 
   void Validate() const {

@@ -783,12 +783,15 @@ void PoseCellNetwork::CreateExperience(const FloorBoundary* boundary) {
   has_current_experience_ = true;
 }
 
-bool PoseCellNetwork::BoundaryAllowsLink(const ExperienceCell& e, const FloorBoundary* boundary) const {
-  if (!config_.exp_boundary_check || !boundary || !e.boundary_known) return true;
-  if (frames_processed_ - e.created_frame < static_cast<uint64_t>(config_.exp_boundary_min_age_frames)) return true;
+std::optional<BoundaryMatch> PoseCellNetwork::MatchBoundary(const ExperienceCell& e,
+                                                            const FloorBoundary* boundary) const {
   const size_t min_points = static_cast<size_t>(config_.exp_boundary_min_points);
-  if (boundary->size() < min_points || e.boundary.size() < min_points) return false;
-  const BoundaryMatch match = RegisterBoundaries(e.boundary, *boundary);
+  if (!boundary || !e.boundary_known || boundary->size() < min_points || e.boundary.size() < min_points)
+    return std::nullopt;
+  return RegisterBoundaries(e.boundary, *boundary);
+}
+
+bool PoseCellNetwork::BoundaryAligns(const BoundaryMatch& match) const {
   return match.median_residual_m < config_.exp_boundary_max_residual_m &&
          match.offset_m() < config_.exp_boundary_max_offset_m;
 }
@@ -825,13 +828,29 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
           matched = id;
         }
       }
-      if (matched == kNoExperience || !(min_delta < config_.exp_delta_pc_threshold)) {
+      const bool recognised = matched != kNoExperience && min_delta < config_.exp_delta_pc_threshold;
+      const bool linked = recognised && Linked(current_experience_, matched);
+      // A new link to an experience old enough is checked (exp_boundary_check): no measured
+      // boundary, or one that does not align, refuses it. A boundary known only to one side
+      // (adopted from the map, a frame without odometry) does not.
+      const bool checked = recognised && !linked && config_.exp_boundary_check && boundary &&
+                           experiences_[matched].boundary_known &&
+                           frames_processed_ - experiences_[matched].created_frame >=
+                               static_cast<uint64_t>(config_.exp_boundary_min_age_frames);
+      std::optional<BoundaryMatch> match;
+      if (checked || (recognised && config_.exp_boundary_offset)) match = MatchBoundary(experiences_[matched], boundary);
+      const bool aligns = match && BoundaryAligns(*match);
+      if (!recognised) {
         create();
-      } else if (!Linked(current_experience_, matched) && !BoundaryAllowsLink(experiences_[matched], boundary)) {
+      } else if (checked && !aligns) {
         create();
         action.refused_link_to = matched;
       } else {
-        if (Linked(current_experience_, matched)) {
+        if (config_.exp_boundary_offset && aligns) {
+          action.offset_x_m = match->pose.x();
+          action.offset_y_m = match->pose.y();
+        }
+        if (linked) {
           action.kind = Action::Kind::kSet;
         } else {
           action.kind = Action::Kind::kLink;

@@ -31,9 +31,11 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
+#include "services/pose_cells/boundary_match.h"
 #include "services/pose_cells/pose_cell_action.h"
 #include "services/pose_cells/pose_cell_config.h"
 #include "services/pose_cells/proto/pose_cells_state.pb.h"
@@ -163,8 +165,10 @@ class PoseCellNetwork {
     bool boundary_known = false;  // boundary measured (not adopted from the map)
     FloorBoundary boundary;
   };
-  // exp_boundary_check's verdict on linking to e from a frame that sees boundary.
-  bool BoundaryAllowsLink(const ExperienceCell& e, const FloorBoundary* boundary) const;
+  // The two views' floor boundaries registered (boundary_match.h) when both are known and hold
+  // exp_boundary_min_points points; nullopt otherwise.
+  std::optional<BoundaryMatch> MatchBoundary(const ExperienceCell& e, const FloorBoundary* boundary) const;
+  bool BoundaryAligns(const BoundaryMatch& match) const;
   // Active indices along one axis: sorted list, membership mask, and maximal contiguous runs
   // [begin, end) (not wrapping), so inner loops over x are plain vectorisable ranges.
   struct AxisSet {

@@ -87,6 +87,8 @@ json ToJson(const msg::PoseCellAction& m) {
           {"from_experience_id", m.from_experience_id},
           {"template_id", m.template_id},
           {"relative_angle_rad", m.relative_angle_rad},
+          {"offset_x_m", m.offset_x_m},
+          {"offset_y_m", m.offset_y_m},
           {"pc_x", static_cast<double>(m.pc_x)},
           {"pc_y", static_cast<double>(m.pc_y)},
           {"pc_th", static_cast<double>(m.pc_th)},

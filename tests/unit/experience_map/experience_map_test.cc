@@ -190,9 +190,12 @@ TEST(ExperienceMap, ALinkToARecognisedPlaceAgreesWithTheHeadingTheRecognitionGiv
   EXPECT_NEAR(map.RobotPose().th_rad, 0.3, 1e-12);
 }
 
-// Experience 0 at the origin, experience 1 two metres east; the robot drives back 1.7 m west
-// (dead reckoned at x = 0.3) and recognises experience 0. No map correction.
-Pose2 PoseAfterRecognising(double position_correction) {
+// Experience 0 at the origin facing +y, experience 1 two metres east; the robot drives back 1.7
+// m west (dead reckoned at x = 0.3, facing -x) and recognises experience 0, measured
+// `offset_left_m` to its left (the robot stands at x = -offset_left_m in truth). No map
+// correction. Returns the robot's pose after the recognition and the length of the link 0 -> 1,
+// averaged with the way back (000 eq. 2).
+std::pair<Pose2, double> RecogniseFromTheEast(double position_correction, double offset_left_m = 0.0) {
   ExperienceMapConfig config = NoCorrection();
   config.exp_position_correction = position_correction;
   ExperienceMap map(config);
@@ -202,21 +205,41 @@ Pose2 PoseAfterRecognising(double position_correction) {
   map.Apply(Create(1, 0));
   map.Integrate(0.0, kPi, 1.0);
   map.Integrate(1.7, 0.0, 1.0);
-  map.Apply(LinkTo(Kind::kLink, 1, 0));
+  ExperienceAction link = LinkTo(Kind::kLink, 1, 0);
+  link.relative_angle_rad = kPi / 2;  // facing -x, a quarter turn left of experience 0
+  link.offset_y_m = offset_left_m;
+  map.Apply(link);
   EXPECT_EQ(map.current_id(), 0u);
-  return map.RobotPose();
+  EXPECT_EQ(map.links().size(), 1u);
+  return {map.RobotPose(), map.links().front().d_m};
 }
 
 TEST(ExperienceMap, RecognitionTakesTheConfiguredShareOfThePositionDifference) {
-  const Pose2 on = PoseAfterRecognising(1.0);  // OpenRatSLAM: on the experience
+  const Pose2 on = RecogniseFromTheEast(1.0).first;  // OpenRatSLAM: on the experience
   EXPECT_NEAR(on.x_m, 0.0, 1e-9);
   EXPECT_NEAR(on.y_m, 0.0, 1e-9);
-  const Pose2 part = PoseAfterRecognising(0.4);  // 0.4 of the way from x = 0.3 to 0
+  const Pose2 part = RecogniseFromTheEast(0.4).first;  // 0.4 of the way from x = 0.3 to 0
   EXPECT_NEAR(part.x_m, 0.18, 1e-9);
   EXPECT_NEAR(part.y_m, 0.0, 1e-9);
   ExperienceMapConfig config;
   config.exp_position_correction = 0.0;
   EXPECT_THROW(config.Validate(), ConfigError);
+}
+
+// A recognition that measures where the robot stands (the pose cells' exp_boundary_offset) puts
+// the robot there, not on the experience, and the way back it observes keeps the true distance.
+TEST(ExperienceMap, RecognitionWithAMeasuredOffsetPutsTheRobotWhereItStands) {
+  const auto [agrees, agrees_link] = RecogniseFromTheEast(1.0, -0.3);  // at x = 0.3, as dead reckoned
+  EXPECT_NEAR(agrees.x_m, 0.3, 1e-9);
+  EXPECT_NEAR(agrees.y_m, 0.0, 1e-9);
+  EXPECT_NEAR(agrees.th_rad, kPi, 1e-9);
+  EXPECT_NEAR(agrees_link, 2.0, 1e-9);
+  EXPECT_NEAR(RecogniseFromTheEast(1.0).second, 1.85, 1e-9);  // on the experience: back 0.3 m short
+  const Pose2 measured = RecogniseFromTheEast(1.0, -0.1).first;  // at x = 0.1, not 0.3
+  EXPECT_NEAR(measured.x_m, 0.1, 1e-9);
+  const Pose2 part = RecogniseFromTheEast(0.4, -0.1).first;  // 0.4 of the way from 0.3 to 0.1
+  EXPECT_NEAR(part.x_m, 0.22, 1e-9);
+  EXPECT_NEAR(part.y_m, 0.0, 1e-9);
 }
 
 TEST(ExperienceMap, HeadingCorrectionOutsideZeroToOneIsRefused) {
@@ -814,6 +837,9 @@ TEST(ExperienceMap, RejectsInconsistentIdsAndNonFiniteOdometry) {
   ExperienceAction nan_angle = LinkTo(Kind::kSet, 1, 0);
   nan_angle.relative_angle_rad = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(map.Apply(nan_angle), std::invalid_argument);
+  ExperienceAction nan_offset = LinkTo(Kind::kSet, 1, 0);
+  nan_offset.offset_x_m = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(map.Apply(nan_offset), std::invalid_argument);
   EXPECT_THROW(map.Integrate(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.1), std::invalid_argument);
   EXPECT_THROW(map.Integrate(1.0, std::numeric_limits<double>::infinity(), 0.1), std::invalid_argument);
   EXPECT_THROW(map.Integrate(1.0, 0.0, -0.1), std::invalid_argument);

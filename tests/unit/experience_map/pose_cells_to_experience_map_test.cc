@@ -24,6 +24,8 @@ experience_map::ExperienceAction ToExperienceAction(const pose_cells::Action& a)
   e.from_experience_id = a.from_experience_id;
   e.template_id = a.template_id;
   e.relative_angle_rad = a.relative_angle_rad;
+  e.offset_x_m = a.offset_x_m;
+  e.offset_y_m = a.offset_y_m;
   e.pc_x = a.pc_x;
   e.pc_y = a.pc_y;
   e.pc_th = a.pc_th;

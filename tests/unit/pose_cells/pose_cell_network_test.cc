@@ -359,6 +359,37 @@ TEST(PoseCellNetwork, BoundaryCheckLeavesUnmeasuredYoungAndUncheckedLinksAlone) 
   }
 }
 
+// exp_boundary_offset: a link or set whose two views' boundaries register says where the robot
+// stands in the experience's frame (the corner seen 0.3 m nearer: 0.3 m ahead of it); views that
+// do not register, or the key off, leave the robot on the experience.
+TEST(PoseCellNetwork, BoundaryOffsetRidesOnTheLinkAndTheSet) {
+  const FloorBoundary there = CornerScan(0.0), nearer = CornerScan(0.3), elsewhere = CorridorScan();
+  PoseCellConfig cfg = SmallConfig();
+  cfg.exp_boundary_offset = true;
+  PoseCellNetwork net(cfg);
+  SquareDrive drive{.outbound = &there, .back = &nearer};
+  drive.Run(net);
+  ASSERT_EQ(drive.actions.size(), 18u);
+  for (const Action& a : {drive.actions[16], drive.actions[17]}) {
+    EXPECT_NE(a.kind, Action::Kind::kCreate);
+    EXPECT_NEAR(a.offset_x_m, 0.3, 0.01);
+    EXPECT_NEAR(a.offset_y_m, 0.0, 0.01);
+  }
+  for (const Action& a : std::vector<Action>(drive.actions.begin(), drive.actions.begin() + 16))
+    EXPECT_EQ(a.offset_x_m, 0.0);
+
+  PoseCellConfig off = SmallConfig();
+  for (const auto& [c, back] : {std::pair{cfg, &elsewhere}, std::pair{off, &nearer}}) {
+    PoseCellNetwork other(c);
+    SquareDrive unmeasured{.outbound = &there, .back = back};
+    unmeasured.Run(other);
+    ASSERT_EQ(unmeasured.actions.size(), 18u);
+    EXPECT_EQ(unmeasured.actions[16].kind, Action::Kind::kLink);
+    EXPECT_EQ(unmeasured.actions[16].offset_x_m, 0.0);
+    EXPECT_EQ(unmeasured.actions[16].offset_y_m, 0.0);
+  }
+}
+
 // After a restart the network adopts the experience map's experiences: those it made itself
 // (same id, template and cell) keep their boundaries and stay checked; the others are unchecked.
 TEST(PoseCellNetwork, AdoptedMapKeepsTheBoundariesOfTheNetworksOwnExperiences) {
