@@ -19,7 +19,8 @@
 //   4. best pose: population vector (circular mean) over +-pc_cells_to_avg cells around the peak.
 //   5. action: OpenRatSLAM get_action with explicit ids; with exp_boundary_check a new link to
 //      an old experience must also pass the floor-boundary check (boundary_match.h), else the
-//      network makes a new experience.
+//      network makes a new experience; with exp_boundary_offset a link or set whose two
+//      boundaries align carries the registered offset of the robot from the experience.
 //
 // Speed: activity is compact, so every pass runs only over the product of the active index sets
 // of x, y and theta (dilated by the kernel radius or the shift); buffers are preallocated and
