@@ -122,15 +122,15 @@ void ExperienceMap::AverageInto(Link& link, const Observation& obs, bool reverse
   link.traversals += 1;
 }
 
-void ExperienceMap::SetCurrent(uint32_t id, double relative_angle_rad, double offset_x_m, double offset_y_m) {
+void ExperienceMap::SetCurrent(uint32_t id, const ExperienceAction& a) {
   if (has_current_ && id == current_) return;  // OpenRatSLAM keeps accumulating then
   current_ = id;
   has_current_ = true;
   const double th = experiences_[id].th_rad, c = std::cos(th), s = std::sin(th);
-  accum_x_ = c * offset_x_m - s * offset_y_m;
-  accum_y_ = s * offset_x_m + c * offset_y_m;
+  accum_x_ = c * a.offset_x_m - s * a.offset_y_m;
+  accum_y_ = s * a.offset_x_m + c * a.offset_y_m;
   accum_time_ = 0.0;
-  accum_facing_ = WrapAngle(th + relative_angle_rad);
+  accum_facing_ = WrapAngle(th + a.relative_angle_rad);
 }
 
 void ExperienceMap::ValidateIds(const ExperienceAction& a) const {
@@ -194,7 +194,7 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       links_from_.emplace_back();
       links_to_.emplace_back();
       if (has_current_) AddLink(current_, e.id, ObservedFromCurrent({}));
-      SetCurrent(e.id, 0.0, 0.0, 0.0);
+      SetCurrent(e.id, {});
       break;
     }
     case ExperienceAction::Kind::kLink:
@@ -222,7 +222,7 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         if (!config_.exp_graph_optimisation) SeedLocalRegion(current_, to);
       }
       const Pose2 dead_reckoned = RobotPose();
-      SetCurrent(to, a.relative_angle_rad, a.offset_x_m, a.offset_y_m);
+      SetCurrent(to, a);
       if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
         accum_facing_ = WrapAngle(dead_reckoned.th_rad +
                                   config_.exp_heading_correction * WrapAngle(accum_facing_ - dead_reckoned.th_rad));

@@ -156,7 +156,8 @@ class ExperienceMap {
   void AddLink(uint32_t from, uint32_t to, const Observation& o);
   void AverageInto(Link& link, const Observation& o, bool reversed);
   int FindLink(uint32_t from, uint32_t to) const;
-  void SetCurrent(uint32_t id, double relative_angle_rad, double offset_x_m, double offset_y_m);
+  // Makes `id` current, the robot at the action's offset from it facing its relative angle.
+  void SetCurrent(uint32_t id, const ExperienceAction& a);
   // Relaxes link links_[index] (000 eq. 3); returns the largest change it made.
   double RelaxLink(uint32_t index);
   void SeedLocalRegion(uint32_t a, uint32_t b);
