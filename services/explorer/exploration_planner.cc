@@ -351,8 +351,8 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
         continue;
       }
       // A refusal on the way through the margin leaves an obstacle kept off there, which may be
-      // all that closes that way now: look all round first (eight of twelve demo runs ended
-      // right after such a refusal, two with 3-5% of the floor unseen past a narrow passage).
+      // all that closes that way now: look all round first (seven of twelve demo runs ended
+      // right after such a refusal, one with 4.5% of the floor unseen past a narrow passage).
       if (squeezing && !blocking_obstacles_.empty() && !looked_here) {
         std::vector<uint8_t> open = traversable_without_keep_off;
         for (size_t i = 0; i < n; ++i) open[i] = open[i] || squeezable(i);

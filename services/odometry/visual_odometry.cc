@@ -11,6 +11,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -263,9 +264,11 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
                                              config_.vtrans_image_y_min, config_.vtrans_image_y_max, size, "vtrans");
     const cv::Rect vrot_crop = ResolveCrop(config_.vrot_image_x_min, config_.vrot_image_x_max,
                                            config_.vrot_image_y_min, config_.vrot_image_y_max, size, "vrot");
-    for (const cv::Rect& crop : {vtrans_crop, vrot_crop}) {
-      if (crop.width <= config_.min_overlap_px) {
-        throw std::invalid_argument("VisualOdometry: crop width " + std::to_string(crop.width) +
+    const int vrot_matched_width = config_.rotation_from_halves ? vrot_crop.width / 2 : vrot_crop.width;
+    for (const int width : {vtrans_crop.width, vrot_matched_width}) {
+      if (width <= config_.min_overlap_px) {
+        throw std::invalid_argument("VisualOdometry: crop width " + std::to_string(width) +
+                                    (config_.rotation_from_halves && width == vrot_matched_width ? " (half the rotation crop)" : "") +
                                     " must exceed min_overlap_px " + std::to_string(config_.min_overlap_px));
       }
     }
@@ -280,9 +283,26 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
 
   CropProfile(image, vtrans_crop_, vtrans_profile_);
   CropProfile(image, vrot_crop_, vrot_profile_);
-  const ProfileMatch rotation =
-      BestProfileShift(vrot_profile_, vrot_previous_, config_.max_shift_px, config_.min_overlap_px,
-                       config_.normalise_profile_brightness);
+  // The rotation profile's shift (refined below a pixel with subpixel_rotation) over [first, first + width).
+  const auto rotation_shift = [&](size_t first, size_t width) {
+    const std::span<const float> current(vrot_profile_.data() + first, width);
+    const std::span<const float> previous(vrot_previous_.data() + first, width);
+    const ProfileMatch match = BestProfileShift(current, previous, config_.max_shift_px, config_.min_overlap_px,
+                                                config_.normalise_profile_brightness);
+    double shift = match.shift;
+    if (config_.subpixel_rotation)
+      shift += SubpixelOffset(current, previous, match, config_.normalise_profile_brightness);
+    return std::pair{match.shift, shift};
+  };
+  const size_t rotation_width = vrot_profile_.size();
+  std::pair<int, double> rotation;
+  if (config_.rotation_from_halves) {
+    const size_t half = rotation_width / 2;
+    const auto left = rotation_shift(0, half), right = rotation_shift(rotation_width - half, half);
+    rotation = {static_cast<int>(std::lround(0.5 * (left.first + right.first))), 0.5 * (left.second + right.second)};
+  } else {
+    rotation = rotation_shift(0, rotation_width);
+  }
   const ProfileMatch speed =
       BestProfileShift(vtrans_profile_, vtrans_previous_, config_.max_shift_px, config_.min_overlap_px,
                        config_.normalise_profile_brightness);
@@ -291,11 +311,8 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
 
   const double rad_per_px = config_.camera_fov_deg * std::numbers::pi / 180.0 / image_size_.width;
   Velocity velocity;
-  velocity.rotation_shift_px = rotation.shift;
-  double shift = rotation.shift;
-  if (config_.subpixel_rotation)
-    shift += SubpixelOffset(vrot_previous_, vrot_profile_, rotation, config_.normalise_profile_brightness);
-  velocity.vrot = shift * rad_per_px / dt_s;
+  velocity.rotation_shift_px = rotation.first;
+  velocity.vrot = rotation.second * rad_per_px / dt_s;
   velocity.speed_difference = speed.difference;
   const double moving_difference = std::max(speed.difference - config_.vtrans_noise_floor, 0.0);
   velocity.vtrans =

@@ -606,9 +606,9 @@ TEST(ExplorationPlannerTest, SqueezesThroughADoorNarrowerThanTheMarginsBeforeCal
 
 TEST(ExplorationPlannerTest, ARefusalOnTheWayThroughTheMarginIsLookedAtBeforeCallingItComplete) {
   // The squeeze above, refused in the door (a bump or look before you move): kept off, that
-  // obstacle closes the only way. Seen at the end of eight of twelve demo runs: the last plan
-  // went through the margin, a refusal followed, and exploration ended at once (in two runs
-  // with 3-5% of the reachable floor unseen beyond a narrow passage).
+  // obstacle closes the only way. Seen at the end of seven of twelve demo runs: the last plan
+  // went through the margin, a refusal followed, and exploration ended at once (in one run with
+  // 4.5% of the reachable floor unseen beyond a narrow passage).
   TestGrid grid(200, 60, 0);
   for (int y = 0; y < 60; ++y)
     if (y < 27 || y > 32) grid.Set(150, y, 100);

@@ -151,6 +151,49 @@ TEST(VisualOdometryTest, SubpixelRotationRecoversAFractionalShift) {
   }
 }
 
+TEST(VisualOdometryTest, RotationFromHalvesKeepsATurnAndCancelsTheImageGrowingAhead) {
+  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
+  VisualOdometryConfig halves;
+  halves.rotation_from_halves = true;
+  halves.subpixel_rotation = true;
+  VisualOdometryConfig whole = halves;
+  whole.rotation_from_halves = false;
+  // A turn moves both halves the same way: their mean is the turn.
+  const cv::Mat wide = Texture(760, 480, 2);
+  for (int shift : {12, -25}) {
+    VisualOdometry vo(halves);
+    vo.Update(View(wide, 60, 640), kDt);
+    const Velocity v = vo.Update(View(wide, 60 - shift, 640), kDt);
+    EXPECT_EQ(v.rotation_shift_px, shift);
+    EXPECT_NEAR(v.vrot * kDt / rad_per_px, shift, 0.2);
+  }
+  // Driving straight at a wall whose left half has the stronger texture: the view grows 10%
+  // about the centre, the left half moving left and the right half right. One match follows the
+  // left half and reads a clockwise turn of several pixels; the halves' mean reads none.
+  cv::Mat scene = Texture(640, 480, 5);
+  cv::Mat right = scene(cv::Rect(320, 0, 320, 480));
+  right.convertTo(right, -1, 0.2, 100);
+  const cv::Size size = scene.size();
+  const int w = static_cast<int>(std::lround(640 / 1.1)), h = static_cast<int>(std::lround(480 / 1.1));
+  cv::Mat nearer;
+  cv::resize(scene(cv::Rect((640 - w) / 2, (480 - h) / 2, w, h)), nearer, size, 0, 0, cv::INTER_LINEAR);
+  VisualOdometry one(whole), two(halves);
+  one.Update(scene, kDt);
+  two.Update(scene, kDt);
+  EXPECT_LT(one.Update(nearer, kDt).vrot * kDt / rad_per_px, -4.0);
+  EXPECT_NEAR(two.Update(nearer, kDt).vrot * kDt / rad_per_px, 0.0, 1.0);
+  // Each half must be wider than min_overlap_px.
+  halves.vrot_image_x_min = 300;
+  halves.vrot_image_x_max = 350;
+  VisualOdometry narrow(halves);
+  try {
+    narrow.Update(scene, kDt);
+    FAIL() << "accepted halves narrower than min_overlap_px";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("half the rotation crop"), std::string::npos) << e.what();
+  }
+}
+
 TEST(VisualOdometryTest, RotationRateScalesWithDt) {
   const cv::Mat wide = Texture(760, 480, 3);
   VisualOdometry a(VisualOdometryConfig{}), b(VisualOdometryConfig{});
