@@ -30,6 +30,17 @@ ExplorerConfig Config() {
   return c;
 }
 
+// Expects the next plan to be one pirouette where the robot stands, records it, and returns the
+// plan after it.
+Plan LooksAllRoundThenPlans(ExplorationPlanner& planner, const TestGrid& grid, const Pose2D& robot) {
+  const Plan look = planner.PlanFrom(grid.View(), robot);
+  EXPECT_FALSE(look.complete) << look.reason;
+  EXPECT_EQ(look.commands.size(), 1u) << look.reason;
+  EXPECT_TRUE(!look.commands.empty() && look.commands[0].kind == Kind::kPirouette) << look.reason;
+  planner.RecordPirouette(robot);
+  return planner.PlanFrom(grid.View(), robot);
+}
+
 TEST(ExplorationPlannerTest, UnknownWorldStartsWithAPirouette) {
   TestGrid grid(40, 40, -1);
   ExplorationPlanner planner(Config());
@@ -384,13 +395,8 @@ TEST(ExplorationPlannerTest, GoalBlockedRepeatedlyIsSetAsideAndTriedAgainAfterAL
     EXPECT_FALSE(restarted.PlanFrom(grid.View(), robot).complete);
   }
   // The only unknown space left was set aside for refused moves: look all round first...
-  const Plan look = planner.PlanFrom(grid.View(), robot);
-  ASSERT_FALSE(look.complete) << look.reason;
-  ASSERT_EQ(look.commands.size(), 1u);
-  EXPECT_EQ(look.commands[0].kind, Kind::kPirouette);
-  planner.RecordPirouette(robot);
   // ...then try it again, once (blocked_goal_retries).
-  const Plan again = planner.PlanFrom(grid.View(), robot);
+  const Plan again = LooksAllRoundThenPlans(planner, grid, robot);
   ASSERT_FALSE(again.complete) << again.reason;
   EXPECT_EQ(again.goal_x, plan.goal_x);
   EXPECT_EQ(again.goal_y, plan.goal_y);
@@ -525,13 +531,8 @@ TEST(ExplorationPlannerTest, ObstaclesKeptOffSinceTheLastLookDoNotEndExploration
     for (double y : {0.85, 0.95, 1.05, 1.15}) planner.ReportBlocked(Plan{}, std::pair{1.55, y});
   };
   refuse_the_door();
-  const Plan look = planner.PlanFrom(grid.View(), robot);
-  EXPECT_FALSE(look.complete) << look.reason;
-  ASSERT_EQ(look.commands.size(), 1u) << look.reason;
-  EXPECT_EQ(look.commands[0].kind, Kind::kPirouette);
   // The pirouette forgets the obstacles: the way through the door is planned again.
-  planner.RecordPirouette(robot);
-  const Plan again = planner.PlanFrom(grid.View(), robot);
+  const Plan again = LooksAllRoundThenPlans(planner, grid, robot);
   EXPECT_FALSE(again.complete) << again.reason;
   EXPECT_LT(ClosestApproach(again, robot, 1.55, 1.0), 0.1);
   // Refused again where the robot has just looked: nothing more to try from here.
@@ -562,21 +563,16 @@ TEST(ExplorationPlannerTest, ObstaclesKeptOffAroundARobotInTheMarginDoNotEndExpl
   ASSERT_FALSE(planner.PlanFrom(grid.View(), robot).complete);
   for (int k = 0; k < 64; ++k)
     planner.ReportBlocked(Plan{}, std::pair{robot.x + 0.5 * std::cos(k * M_PI / 32), robot.y + 0.5 * std::sin(k * M_PI / 32)});
-  const Plan look = planner.PlanFrom(grid.View(), robot);
-  EXPECT_FALSE(look.complete) << look.reason;
-  ASSERT_EQ(look.commands.size(), 1u) << look.reason;
-  EXPECT_EQ(look.commands[0].kind, Kind::kPirouette);
-  planner.RecordPirouette(robot);
-  const Plan again = planner.PlanFrom(grid.View(), robot);
+  const Plan again = LooksAllRoundThenPlans(planner, grid, robot);
   EXPECT_FALSE(again.complete) << again.reason;
   EXPECT_GT(again.target.x, 1.8);
 }
 
-TEST(ExplorationPlannerTest, SqueezesThroughADoorNarrowerThanTheMarginsBeforeCallingItComplete) {
-  // 10 m x 3 m, 5 cm cells: a known room, a wall at x = 7.5 m with a 30 cm door, unknown space
-  // beyond. The door is wide enough for the robot (radius 10 cm) to keep its radius, too narrow
-  // for any free exploration cell (10 cm cells, 15 cm margins), and the robot is too far from
-  // it for an escape through the margin.
+// 10 m x 3 m, 5 cm cells: a known room, a wall at x = 7.5 m with a 30 cm door, unknown space
+// beyond. The door is wide enough for a robot of radius 10 cm to keep its radius, too narrow
+// for any free exploration cell (10 cm cells, 15 cm margins), and a robot at (0.5, 1.5) is too
+// far from it for an escape through the margin.
+TestGrid RoomWithANarrowDoor() {
   TestGrid grid(200, 60, 0);
   for (int y = 0; y < 60; ++y)
     if (y < 27 || y > 32) grid.Set(150, y, 100);
@@ -584,6 +580,11 @@ TEST(ExplorationPlannerTest, SqueezesThroughADoorNarrowerThanTheMarginsBeforeCal
     for (int x = 151; x < 199; ++x) grid.Set(x, y, -1);
   for (int y = 22; y < 38; ++y)  // floor seen through the door
     for (int x = 151; x < 156; ++x) grid.Set(x, y, 0);
+  return grid;
+}
+
+TEST(ExplorationPlannerTest, SqueezesThroughADoorNarrowerThanTheMarginsBeforeCallingItComplete) {
+  TestGrid grid = RoomWithANarrowDoor();
   ExplorerConfig config = Config();
   config.robot_radius_m = 0.1;
   config.squeeze_through_margin = false;
@@ -609,13 +610,7 @@ TEST(ExplorationPlannerTest, ARefusalOnTheWayThroughTheMarginIsLookedAtBeforeCal
   // obstacle closes the only way. Seen at the end of seven of twelve demo runs: the last plan
   // went through the margin, a refusal followed, and exploration ended at once (in one run with
   // 4.5% of the reachable floor unseen beyond a narrow passage).
-  TestGrid grid(200, 60, 0);
-  for (int y = 0; y < 60; ++y)
-    if (y < 27 || y > 32) grid.Set(150, y, 100);
-  for (int y = 1; y < 59; ++y)
-    for (int x = 151; x < 199; ++x) grid.Set(x, y, -1);
-  for (int y = 22; y < 38; ++y)
-    for (int x = 151; x < 156; ++x) grid.Set(x, y, 0);
+  const TestGrid grid = RoomWithANarrowDoor();
   ExplorerConfig config = Config();
   config.robot_radius_m = 0.1;
   ExplorationPlanner planner(config);
@@ -624,13 +619,8 @@ TEST(ExplorationPlannerTest, ARefusalOnTheWayThroughTheMarginIsLookedAtBeforeCal
   ASSERT_FALSE(squeeze.complete) << squeeze.reason;
   ASSERT_NE(squeeze.reason.find("through the margin"), std::string::npos) << squeeze.reason;
   planner.ReportBlocked(squeeze, std::pair{7.5, 1.5});
-  const Plan look = planner.PlanFrom(grid.View(), robot);
-  EXPECT_FALSE(look.complete) << look.reason;
-  ASSERT_EQ(look.commands.size(), 1u) << look.reason;
-  EXPECT_EQ(look.commands[0].kind, Kind::kPirouette);
   // The look forgets the obstacle: through the door again.
-  planner.RecordPirouette(robot);
-  const Plan again = planner.PlanFrom(grid.View(), robot);
+  const Plan again = LooksAllRoundThenPlans(planner, grid, robot);
   ASSERT_FALSE(again.complete) << again.reason;
   EXPECT_GT(again.target.x, 7.0);
   // Refused again where the robot has just looked: nothing more to try from here.
