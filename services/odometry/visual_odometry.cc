@@ -264,14 +264,15 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
                                              config_.vtrans_image_y_min, config_.vtrans_image_y_max, size, "vtrans");
     const cv::Rect vrot_crop = ResolveCrop(config_.vrot_image_x_min, config_.vrot_image_x_max,
                                            config_.vrot_image_y_min, config_.vrot_image_y_max, size, "vrot");
-    const int vrot_matched_width = config_.rotation_from_halves ? vrot_crop.width / 2 : vrot_crop.width;
-    for (const int width : {vtrans_crop.width, vrot_matched_width}) {
+    const auto require_wider = [&](int width, const std::string& what) {
       if (width <= config_.min_overlap_px) {
-        throw std::invalid_argument("VisualOdometry: crop width " + std::to_string(width) +
-                                    (config_.rotation_from_halves && width == vrot_matched_width ? " (half the rotation crop)" : "") +
+        throw std::invalid_argument("VisualOdometry: " + what + " width " + std::to_string(width) +
                                     " must exceed min_overlap_px " + std::to_string(config_.min_overlap_px));
       }
-    }
+    };
+    require_wider(vtrans_crop.width, "crop");
+    if (config_.rotation_from_halves) require_wider(vrot_crop.width / 2, "half the rotation crop's");
+    else require_wider(vrot_crop.width, "crop");
     image_size_ = size;
     vtrans_crop_ = vtrans_crop;
     vrot_crop_ = vrot_crop;

@@ -43,9 +43,9 @@ struct VisualOdometryConfig {
   // half right, and one match over the whole width finds a turn that is not there (the more
   // textured half wins), up to 0.04 rad a frame right in front of a wall. A turn moves both
   // halves the same way, so the mean keeps it (1.4% larger than the whole crop reads it in the
-  // demo's frames: the columns a shift leaves out are the image's edge for one half and its
-  // centre for the other, and perspective moves the edge more). Off: the whole crop
-  // (OpenRatSLAM).
+  // demo's frames, probably because the columns a shift leaves out are the image's edge for one
+  // half and its centre for the other, and perspective moves the edge more). Off: the whole
+  // crop (OpenRatSLAM).
   bool rotation_from_halves = false;
 
   template <class V>
