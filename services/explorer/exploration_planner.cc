@@ -258,7 +258,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
         }
   };
   if (!goal[robot_index]) traversable[robot_index] = 1;  // the robot is there, whatever the map says
-  const std::vector<uint8_t> traversable_without_keep_off = traversable;
+  std::vector<uint8_t> traversable_without_keep_off = traversable;  // and with the margin once squeezing
   for (const auto& [ox, oy] : blocking_obstacles_) keep_off(ox, oy);
 
   const bool looked_here = last_pirouette_ && cs.CellX(last_pirouette_->x) == rx &&
@@ -281,13 +281,6 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   const bool centre_step = off_centre > 0.25 * cs.cell_size_m;
   const bool centre_step_clear = !centre_step || (IsPathClear(occupancy, to_centre, off_centre) &&
                                                   !PassesBlockingObstacle(to_centre, off_centre));
-  // Whether a goal can be reached over `open` as the loop below would find it: from the robot's
-  // cell, or by an escape through the margin (the robot is often in it after a refusal).
-  const auto reachable = [&](const std::vector<uint8_t>& open, const std::vector<uint8_t>& open_goal) {
-    const std::vector<int32_t> open_cost = ComputeExplorationTransform(cs.width, cs.height, open, open_goal);
-    return open_cost[robot_index] != kUnreachable ||
-           !EscapePath(cs, open_cost, std::vector<uint8_t>(n, 0), rx, ry).empty();
-  };
   while (true) {
     const std::vector<int32_t> cost = ComputeExplorationTransform(cs.width, cs.height, traversable, goal);
     Plan plan;
@@ -323,7 +316,13 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
           open[i] = cs.cells[i] == CellClass::kFree;
           open_goal[i] = cs.cells[i] == CellClass::kUnknown;
         }
-        if (reachable(open, open_goal)) {
+        // Reachable as the loop above would find it (through the margin too once squeezing: a
+        // refusal on the way through it, kept off, may be all that closes that way): from the
+        // robot's cell, or by an escape through the margin (the robot is often in it after a
+        // refusal).
+        const std::vector<int32_t> open_cost = ComputeExplorationTransform(cs.width, cs.height, open, open_goal);
+        if (open_cost[robot_index] != kUnreachable ||
+            !EscapePath(cs, open_cost, std::vector<uint8_t>(n, 0), rx, ry).empty()) {
           if (!looked_here) return look_here(plan, "unknown space is reachable only past refused moves: pirouette");
           if (!retry.empty()) {
             std::erase_if(set_aside_, [&](const SetAsideGoal& g) {
@@ -341,23 +340,16 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       // last unknown space from the free cells: plan once more through the margin, over cells
       // that hold no obstacle and nothing unseen themselves; the moves still keep the robot
       // radius (checked below).
-      const auto squeezable = [&](size_t i) {
-        return cs.cells[i] == CellClass::kOccupied && !cs.obstacle[i] && !cs.unseen[i];
-      };
+      // Seven of twelve demo runs ended right after a refusal on such a plan, one with 4.5% of
+      // the floor unseen past a narrow passage, before the look above also counted the margin.
       if (config_.squeeze_through_margin && !squeezing) {
         squeezing = true;
-        for (size_t i = 0; i < n; ++i)
-          if (squeezable(i) && !near_blocking[i]) traversable[i] = 1;
+        for (size_t i = 0; i < n; ++i) {
+          if (cs.cells[i] != CellClass::kOccupied || cs.obstacle[i] || cs.unseen[i]) continue;
+          traversable_without_keep_off[i] = 1;
+          if (!near_blocking[i]) traversable[i] = 1;
+        }
         continue;
-      }
-      // A refusal on the way through the margin leaves an obstacle kept off there, which may be
-      // all that closes that way now: look all round first (seven of twelve demo runs ended
-      // right after such a refusal, one with 4.5% of the floor unseen past a narrow passage).
-      if (squeezing && !blocking_obstacles_.empty() && !looked_here) {
-        std::vector<uint8_t> open = traversable_without_keep_off;
-        for (size_t i = 0; i < n; ++i) open[i] = open[i] || squeezable(i);
-        if (reachable(open, goal))
-          return look_here(plan, "unknown space is reachable through the margin only past refused moves: pirouette");
       }
       plan.complete = true;
       plan.commands.push_back({MotionCommand::Kind::kStop});
