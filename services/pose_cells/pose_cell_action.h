@@ -35,8 +35,9 @@ struct Action {
   uint32_t from_experience_id = kNoExperience;  // current experience before the action
   uint32_t template_id = 0;                     // view template of the frame
   double relative_angle_rad = 0.0;              // view orientation offset
-  // kLink/kSet with exp_boundary_offset: where the robot stands in experience_id's frame (x
-  // forward, y left, metres) as the two floor boundaries register; zero when not measured.
+  // kLink/kSet with exp_view_offset or exp_boundary_offset: where the robot stands in
+  // experience_id's frame (x forward, y left, metres) as measured from the best recent view and
+  // the odometry, or as the two floor boundaries register; zero when not measured.
   double offset_x_m = 0.0;
   double offset_y_m = 0.0;
   // Pose-cell position (cells) of experience_id.

@@ -40,6 +40,18 @@ struct PoseCellConfig {
   // view's as the check requires (whatever the experience's age) carries where the robot stands
   // in that experience's frame (Action::offset_x_m, offset_y_m); OpenRatSLAM puts the robot on it.
   bool exp_boundary_offset = false;
+  // Not OpenRatSLAM's: a link or set carries where the robot stands in the recognised
+  // experience's frame as measured from the views and the odometry. Of the last
+  // exp_view_offset_frames frames, the one whose view matched its template with the smallest
+  // difference is taken to stand where an experience of that template made within
+  // exp_view_offset_max_gap_frames frames of the recognised one stood; the odometry from the
+  // recognised experience to that one, then from that frame to now, gives the offset. Only
+  // odometry over short stretches enters (the loop's drift cancels). A place is mostly recognised
+  // after the robot passed it (the packet moves late): this says how far. Takes precedence over
+  // exp_boundary_offset, which is used when no such frame is found.
+  bool exp_view_offset = false;
+  int exp_view_offset_frames = 80;
+  int exp_view_offset_max_gap_frames = 100;
 
   template <class V>
   void VisitFields(V& v) {
@@ -71,6 +83,12 @@ struct PoseCellConfig {
       "a checked link needs the registered offset between the two views under this (m)");
     v("exp_boundary_offset", exp_boundary_offset,
       "a link or set carries the robot's offset from the experience, from the registered floor boundaries");
+    v("exp_view_offset", exp_view_offset,
+      "a link or set carries the robot's offset from the experience, from the best view match of the last frames and the odometry");
+    v("exp_view_offset_frames", exp_view_offset_frames,
+      "exp_view_offset looks for the best view match in this many last frames");
+    v("exp_view_offset_max_gap_frames", exp_view_offset_max_gap_frames,
+      "exp_view_offset relates that view's experience to the recognised one only if made within this many frames of it");
   }
 
   void Validate() const {
@@ -96,6 +114,8 @@ struct PoseCellConfig {
     Require(exp_boundary_min_points >= 3, "exp_boundary_min_points", "must be at least 3");
     Require(exp_boundary_max_residual_m > 0, "exp_boundary_max_residual_m", "must be positive");
     Require(exp_boundary_max_offset_m > 0, "exp_boundary_max_offset_m", "must be positive");
+    Require(exp_view_offset_frames >= 1, "exp_view_offset_frames", "must be at least 1");
+    Require(exp_view_offset_max_gap_frames >= 0, "exp_view_offset_max_gap_frames", "must be non-negative");
   }
 };
 

@@ -48,6 +48,18 @@ inline int Wrap(int i, int n) {
   return i < 0 ? i + n : i;
 }
 
+// b in a's frame, and a then b: planar poses (x, y, th).
+template <class Pose>
+Pose Between(const Pose& a, const Pose& b) {
+  const double c = std::cos(a.th), s = std::sin(a.th), dx = b.x - a.x, dy = b.y - a.y;
+  return {c * dx + s * dy, -s * dx + c * dy, b.th - a.th};
+}
+template <class Pose>
+Pose Compose(const Pose& a, const Pose& b) {
+  const double c = std::cos(a.th), s = std::sin(a.th);
+  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, a.th + b.th};
+}
+
 inline double WrapReal(double v, double n) {
   v = std::fmod(v, n);
   if (v < 0) v += n;
@@ -772,7 +784,7 @@ bool PoseCellNetwork::Linked(uint32_t a, uint32_t b) const {
 void PoseCellNetwork::CreateExperience(const FloorBoundary* boundary) {
   const uint32_t id = static_cast<uint32_t>(experiences_.size());
   experiences_.push_back({best_.x, best_.y, best_.th, current_template_, frames_processed_, boundary != nullptr,
-                          boundary ? *boundary : FloorBoundary{}});
+                          boundary ? *boundary : FloorBoundary{}, true, odometry_});
   views_[current_template_].experience_ids.push_back(id);
   links_of_.emplace_back();
   if (has_current_experience_) {
@@ -789,6 +801,34 @@ std::optional<BoundaryMatch> PoseCellNetwork::MatchBoundary(const ExperienceCell
   if (!boundary || !e.boundary_known || boundary->size() < min_points || e.boundary.size() < min_points)
     return std::nullopt;
   return RegisterBoundaries(e.boundary, *boundary);
+}
+
+std::optional<Eigen::Vector2d> PoseCellNetwork::ViewOffset(uint32_t recognised) const {
+  const ExperienceCell& e = experiences_[recognised];
+  if (!e.odometry_known) return std::nullopt;
+  const RecentView* best = nullptr;
+  const ExperienceCell* there = nullptr;  // where the robot stood at best
+  const uint64_t max_gap = static_cast<uint64_t>(config_.exp_view_offset_max_gap_frames);
+  for (auto it = recent_views_.rbegin(); it != recent_views_.rend(); ++it) {  // newest first: ties keep it
+    if (best && it->difference >= best->difference) continue;
+    const ExperienceCell* nearest = nullptr;
+    uint64_t nearest_gap = max_gap + 1;
+    for (uint32_t id : views_[it->template_id].experience_ids) {
+      const ExperienceCell& c = experiences_[id];
+      const uint64_t gap = c.created_frame > e.created_frame ? c.created_frame - e.created_frame
+                                                             : e.created_frame - c.created_frame;
+      if (c.odometry_known && gap < nearest_gap) {
+        nearest_gap = gap;
+        nearest = &c;
+      }
+    }
+    if (!nearest) continue;
+    best = &*it;
+    there = nearest;
+  }
+  if (!best) return std::nullopt;
+  const OdometryPose offset = Compose(Between(e.odometry, there->odometry), Between(best->odometry, odometry_));
+  return Eigen::Vector2d(offset.x, offset.y);
 }
 
 bool PoseCellNetwork::BoundaryAligns(const BoundaryMatch& match) const {
@@ -846,7 +886,11 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
         create();
         action.refused_link_to = matched;
       } else {
-        if (config_.exp_boundary_offset && aligns) {
+        const std::optional<Eigen::Vector2d> measured = config_.exp_view_offset ? ViewOffset(matched) : std::nullopt;
+        if (measured) {
+          action.offset_x_m = measured->x();
+          action.offset_y_m = measured->y();
+        } else if (config_.exp_boundary_offset && aligns) {
           action.offset_x_m = match->pose.x();
           action.offset_y_m = match->pose.y();
         }
@@ -875,10 +919,19 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
 
 Action PoseCellNetwork::ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s,
                                      uint32_t template_id, bool template_is_new,
-                                     double relative_angle_rad, const FloorBoundary* boundary) {
+                                     double relative_angle_rad, const FloorBoundary* boundary,
+                                     double view_difference) {
   ValidateFrame(vtrans_mps, vrot_radps, dt_s, template_id, relative_angle_rad);
+  if (!std::isfinite(view_difference) || view_difference < 0) {
+    throw std::invalid_argument("pose cells: view difference must be finite and >= 0");
+  }
   InjectView(template_id, relative_angle_rad, template_is_new);
   Step(vtrans_mps, vrot_radps, dt_s);
+  DeadReckon(vtrans_mps * dt_s, vrot_radps * dt_s);
+  if (config_.exp_view_offset) {
+    recent_views_.push_back({template_id, view_difference, odometry_});
+    if (recent_views_.size() > static_cast<size_t>(config_.exp_view_offset_frames)) recent_views_.pop_front();
+  }
   ++frames_processed_;
   return DecideAction(boundary);
 }
@@ -897,11 +950,18 @@ Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_r
                                                 const FloorBoundary* boundary) {
   ValidateFrame(vtrans_mps, vrot_radps, dt_s, 0, 0.0);
   Step(vtrans_mps, vrot_radps, dt_s);
+  DeadReckon(vtrans_mps * dt_s, vrot_radps * dt_s);
   ++frames_processed_;
   // The view is unchanged: only the pose-cell distance can make a new experience.
   previous_template_ = current_template_;
   has_previous_template_ = has_current_template_;
   return DecideAction(boundary);
+}
+
+void PoseCellNetwork::DeadReckon(double distance_m, double turn_rad) {
+  odometry_.x += distance_m * std::cos(odometry_.th);
+  odometry_.y += distance_m * std::sin(odometry_.th);
+  odometry_.th = std::remainder(odometry_.th + turn_rad, kTwoPi);
 }
 
 void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& experiences,
@@ -947,7 +1007,7 @@ void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& exper
         std::abs(known[id].pc_th - e.cell.th) < 1e-3) {
       experiences_.push_back(std::move(known[id]));
     } else {
-      experiences_.push_back({e.cell.x, e.cell.y, e.cell.th, e.template_id, frames_processed_, false, {}});
+      experiences_.push_back({e.cell.x, e.cell.y, e.cell.th, e.template_id, frames_processed_, false, {}, false, {}});
     }
     views_[e.template_id].experience_ids.push_back(id);
   }
@@ -1057,7 +1117,22 @@ proto::State PoseCellNetwork::SaveState() const {
       pe->add_boundary_xy(p.x());
       pe->add_boundary_xy(p.y());
     }
+    pe->set_odometry_known(e.odometry_known);
+    pe->set_odometry_x(e.odometry.x);
+    pe->set_odometry_y(e.odometry.y);
+    pe->set_odometry_th(e.odometry.th);
   }
+  for (const RecentView& v : recent_views_) {
+    auto* pv = s.add_recent_views();
+    pv->set_template_id(v.template_id);
+    pv->set_difference(v.difference);
+    pv->set_odometry_x(v.odometry.x);
+    pv->set_odometry_y(v.odometry.y);
+    pv->set_odometry_th(v.odometry.th);
+  }
+  s.set_odometry_x(odometry_.x);
+  s.set_odometry_y(odometry_.y);
+  s.set_odometry_th(odometry_.th);
   for (uint32_t a = 0; a < links_of_.size(); ++a) {
     for (uint32_t b : links_of_[a]) {
       if (a < b) {
@@ -1124,7 +1199,17 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
       fail("experience boundary is not a list of points");
     for (float v : e.boundary_xy())
       if (!std::isfinite(v)) fail("experience boundary point not finite");
+    if (!std::isfinite(e.odometry_x()) || !std::isfinite(e.odometry_y()) || !std::isfinite(e.odometry_th()))
+      fail("experience odometry pose not finite");
   }
+  for (const auto& v : s.recent_views()) {
+    if (v.template_id() >= n_views) fail("recent view refers to unknown template");
+    if (!std::isfinite(v.difference()) || v.difference() < 0 || !std::isfinite(v.odometry_x()) ||
+        !std::isfinite(v.odometry_y()) || !std::isfinite(v.odometry_th()))
+      fail("recent view not finite");
+  }
+  if (!std::isfinite(s.odometry_x()) || !std::isfinite(s.odometry_y()) || !std::isfinite(s.odometry_th()))
+    fail("odometry pose not finite");
   for (const auto& l : s.links()) {
     if (l.from_experience_id() >= n_exps || l.to_experience_id() >= n_exps) fail("link to unknown experience");
   }
@@ -1156,9 +1241,14 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   for (const auto& e : s.experiences()) {
     FloorBoundary boundary;
     for (int i = 0; i + 1 < e.boundary_xy_size(); i += 2) boundary.emplace_back(e.boundary_xy(i), e.boundary_xy(i + 1));
-    experiences_.push_back(
-        {e.pc_x(), e.pc_y(), e.pc_th(), e.template_id(), e.created_frame(), e.boundary_known(), std::move(boundary)});
+    experiences_.push_back({e.pc_x(), e.pc_y(), e.pc_th(), e.template_id(), e.created_frame(), e.boundary_known(),
+                            std::move(boundary), e.odometry_known(), {e.odometry_x(), e.odometry_y(), e.odometry_th()}});
   }
+  recent_views_.clear();
+  for (const auto& v : s.recent_views())
+    recent_views_.push_back({v.template_id(), v.difference(), {v.odometry_x(), v.odometry_y(), v.odometry_th()}});
+  while (recent_views_.size() > static_cast<size_t>(config_.exp_view_offset_frames)) recent_views_.pop_front();
+  odometry_ = {s.odometry_x(), s.odometry_y(), s.odometry_th()};
   links_of_.assign(n_exps, {});
   for (const auto& l : s.links()) {
     links_of_[l.from_experience_id()].push_back(l.to_experience_id());

@@ -20,7 +20,8 @@
 //   5. action: OpenRatSLAM get_action with explicit ids; with exp_boundary_check a new link to
 //      an old experience must also pass the floor-boundary check (boundary_match.h), else the
 //      network makes a new experience; with exp_boundary_offset a link or set whose two
-//      boundaries align carries the registered offset of the robot from the experience.
+//      boundaries align carries the registered offset of the robot from the experience; with
+//      exp_view_offset the offset measured from the best recent view and the odometry instead.
 //
 // Speed: activity is compact, so every pass runs only over the product of the active index sets
 // of x, y and theta (dilated by the kernel radius or the shift); buffers are preallocated and
@@ -32,6 +33,7 @@
 #include <Eigen/Core>
 
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -70,10 +72,13 @@ class PoseCellNetwork {
   // template learner just learnt it). Returns the action for the experience map.
   // boundary: the frame's floor boundary, kept with an experience made now and compared with an
   // old experience's before linking to it (exp_boundary_check); nullptr: not measured.
-  // Throws std::invalid_argument (state unchanged) on non-finite or negative dt, non-finite
-  // velocities or angle, or a template id beyond the next expected id.
+  // view_difference: the view's match difference (0 = identical), which exp_view_offset compares
+  // over the last frames.
+  // Throws std::invalid_argument (state unchanged) on non-finite or negative dt or difference,
+  // non-finite velocities or angle, or a template id beyond the next expected id.
   Action ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s, uint32_t template_id,
-                      bool template_is_new, double relative_angle_rad, const FloorBoundary* boundary = nullptr);
+                      bool template_is_new, double relative_angle_rad, const FloorBoundary* boundary = nullptr,
+                      double view_difference = 0.0);
 
   // A frame whose view never arrived (the template learner restarted): path integration only.
   // The current view counts as unchanged, so nothing is injected and no view change drives the
@@ -159,13 +164,27 @@ class PoseCellNetwork {
   // OpenRatSLAM subtracts pc_vt_restore from every template's decay on every view update
   // (clamped at vt_active_decay); done lazily here.
   double EffectiveDecay(const ViewAssociation& v) const;
+  // Dead-reckoned pose of the odometry this network integrated (exp_view_offset).
+  struct OdometryPose {
+    double x = 0.0, y = 0.0, th = 0.0;
+  };
   struct ExperienceCell {
     double pc_x, pc_y, pc_th;
     uint32_t template_id;
     uint64_t created_frame = 0;   // frames_processed_ when made
     bool boundary_known = false;  // boundary measured (not adopted from the map)
     FloorBoundary boundary;
+    bool odometry_known = false;  // made by this network (not adopted from the map)
+    OdometryPose odometry;        // odometry_ when made
   };
+  struct RecentView {
+    uint32_t template_id;
+    double difference;
+    OdometryPose odometry;  // odometry_ at its frame
+  };
+  // exp_view_offset: where the robot stands in experience `recognised`'s frame (pose_cell_config.h);
+  // nullopt when no recent view's template has an experience made near enough in time.
+  std::optional<Eigen::Vector2d> ViewOffset(uint32_t recognised) const;
   // The two views' floor boundaries registered (boundary_match.h) when both are known and hold
   // exp_boundary_min_points points; nullopt otherwise.
   std::optional<BoundaryMatch> MatchBoundary(const ExperienceCell& e, const FloorBoundary* boundary) const;
@@ -242,6 +261,7 @@ class PoseCellNetwork {
   // All activity at one cell (as the constructor starts), best pose there.
   void PlacePacket(const PoseCellPosition& cell);
   void CreateExperience(const FloorBoundary* boundary);
+  void DeadReckon(double distance_m, double turn_rad);
   void ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id,
                      double relative_angle_rad) const;
 
@@ -272,6 +292,8 @@ class PoseCellNetwork {
   uint64_t next_sequence_ = 0;
   uint64_t frames_processed_ = 0;
   uint64_t view_updates_ = 0;
+  OdometryPose odometry_;
+  std::deque<RecentView> recent_views_;  // the last exp_view_offset_frames, oldest first
   std::vector<double> avg_x_, avg_y_, avg_th_;  // population-vector sums, preallocated
   std::vector<float> padded_row_;               // ConvolveX scratch: one row with wrapped margins
 };

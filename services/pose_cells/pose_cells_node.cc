@@ -122,6 +122,7 @@ class PoseCellsNode::Processor {
 
   static std::string ViewProblem(const msg::ViewTemplate& v) {
     if (!std::isfinite(v.relative_angle_rad)) return "view relative angle is not finite";
+    if (!std::isfinite(v.difference) || v.difference < 0) return "view difference is not finite and >= 0";
     if (v.template_id >= v.template_count)
       return "template id " + std::to_string(v.template_id) + " is not below the template count " +
              std::to_string(v.template_count);
@@ -189,7 +190,7 @@ class PoseCellsNode::Processor {
     Action action;
     try {
       action = view ? network_.ProcessFrame(vtrans, vrot, dt, view->template_id, view->is_new,
-                                            view->relative_angle_rad, seen)
+                                            view->relative_angle_rad, seen, view->difference)
                     : network_.ProcessFrameWithoutView(vtrans, vrot, dt, seen);
     } catch (const std::invalid_argument& e) {
       context_.Reject("frame", e.what());

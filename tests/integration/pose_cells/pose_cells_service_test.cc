@@ -189,6 +189,39 @@ TEST_F(PoseCellsServiceTest, BoundaryCheckRefusesTheLoopClosureWhenTheWallsDisag
   if (HasFailure()) ADD_FAILURE() << service->Output();
 }
 
+// exp_view_offset: the service hands the views' differences to the network, whose links and
+// sets then carry the offset measured from the best recent view.
+TEST_F(PoseCellsServiceTest, ViewOffsetRidesOnTheRecognitionsAsTheLibraryMeasuresIt) {
+  auto service = Start({"--set", "pose_cells.exp_view_offset=true"});
+  const int frames = testing::kLapFrames + 10;
+  std::vector<ScriptedFrame> script = testing::ScriptedLoop(frames);
+  for (int i = 0; i < frames; ++i) script[i].view.difference = 0.01 * ((i * 7) % 5);
+  for (const ScriptedFrame& f : script) {
+    velocity_pub_->Publish(f.velocity);
+    view_pub_->Publish(f.view);
+  }
+  const auto actions = AwaitActions(frames);
+  ASSERT_EQ(actions.size(), static_cast<size_t>(frames)) << service->Output();
+  pose_cells::PoseCellConfig config;
+  config.exp_view_offset = true;
+  pose_cells::PoseCellNetwork reference(config);
+  int recognitions = 0, measured = 0;
+  for (int i = 0; i < frames; ++i) {
+    const ScriptedFrame& f = script[i];
+    const pose_cells::Action want =
+        reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s, f.view.template_id,
+                               f.view.is_new, 0.0, nullptr, f.view.difference);
+    ASSERT_EQ(actions[i].kind, KindOf(want.kind)) << "frame " << i;
+    EXPECT_EQ(actions[i].offset_x_m, want.offset_x_m) << "frame " << i;
+    EXPECT_EQ(actions[i].offset_y_m, want.offset_y_m) << "frame " << i;
+    recognitions += want.kind == pose_cells::Action::Kind::kLink || want.kind == pose_cells::Action::Kind::kSet;
+    measured += want.offset_x_m != 0.0 || want.offset_y_m != 0.0;
+  }
+  EXPECT_GE(recognitions, 1);
+  EXPECT_GE(measured, 1);
+  if (HasFailure()) ADD_FAILURE() << service->Output();
+}
+
 TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
   auto service = Start();
   std::vector<ScriptedFrame> script = testing::ScriptedLoop(12);
@@ -199,6 +232,7 @@ TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
   script[8].view.relative_angle_rad = std::numeric_limits<double>::infinity();
   script[9].velocity.boundary_measured = true;
   script[9].velocity.boundary = {{0.5f, std::numeric_limits<float>::quiet_NaN()}};
+  script[10].view.difference = -1.0;
   for (const ScriptedFrame& f : script) {
     velocity_pub_->Publish(f.velocity);
     view_pub_->Publish(f.view);
@@ -215,7 +249,7 @@ TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
   EXPECT_EQ(actions[5].dt_s, 0.1);        // but the time between the frames still passed
   const auto status = AwaitStatus(5);
   ASSERT_TRUE(status) << service->Output();
-  EXPECT_GE(status->messages_rejected, 5u);
+  EXPECT_GE(status->messages_rejected, 6u);
   EXPECT_TRUE(service->Running());
 }
 

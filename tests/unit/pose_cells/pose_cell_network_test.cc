@@ -390,6 +390,51 @@ TEST(PoseCellNetwork, BoundaryOffsetRidesOnTheLinkAndTheSet) {
   }
 }
 
+// exp_view_offset: on the second pass along a corridor the view switches to a place's template
+// half-way there (0.2 m short of it, difference 0.2), after a frame that saw the template before
+// exactly where it was learnt (difference 0). Measured from that frame, the offset puts the robot
+// 0.2 m short of the recognised place, although the odometry read the loop between the passes
+// 0.6 m long; OpenRatSLAM (the key off) puts the robot on the place.
+TEST(PoseCellNetwork, ViewOffsetSaysWhereThePlaceWasRecognisedFromTheBestViewAndTheOdometry) {
+  for (const bool on : {true, false}) {
+    PoseCellConfig cfg = SmallConfig();
+    cfg.exp_view_offset = on;
+    cfg.exp_view_offset_frames = 4;
+    cfg.exp_view_offset_max_gap_frames = 3;
+    PoseCellNetwork net(cfg);
+    uint32_t next = 0;
+    std::vector<double> place;  // true x of the first pass's experiences (= their templates)
+    for (int k = 0; k < 10; ++k) {
+      ASSERT_EQ(net.ProcessFrame(0.4, 0.0, 1.0, next++, true, 0.0).kind, Action::Kind::kCreate);
+      place.push_back(0.4 * (k + 1));
+    }
+    // Round a 4 x 2 m loop to the start with new views; the 4 m side back reads 4.6 m.
+    for (const double step : {0.4, 0.46, 0.4}) {
+      net.ProcessFrame(0.0, kPi / 2, 1.0, next++, true, 0.0);
+      for (int i = 0; i < (step == 0.4 ? 5 : 10); ++i) net.ProcessFrame(step, 0.0, 1.0, next++, true, 0.0);
+    }
+    net.ProcessFrame(0.0, kPi / 2, 1.0, next++, true, 0.0);
+    int recognised = 0, short_of_it = 0;
+    auto second = [&](double x, double v, uint32_t tid, double difference) {
+      const Action a = net.ProcessFrame(v, 0.0, 1.0, tid, false, 0.0, nullptr, difference);
+      if (a.kind != Action::Kind::kLink && a.kind != Action::Kind::kSet) return;
+      ASSERT_LT(a.experience_id, place.size());
+      const double truth = x - place[a.experience_id];
+      ++recognised;
+      short_of_it += truth < -0.1;
+      EXPECT_NEAR(a.offset_x_m, on ? truth : 0.0, 1e-9) << x;
+      EXPECT_NEAR(a.offset_y_m, 0.0, 1e-9) << x;
+    };
+    second(0.4, 0.4, 0, 0.0);
+    for (uint32_t k = 1; k < 10; ++k) {
+      second(place[k] - 0.2, 0.2, k, 0.2);  // the view switches early
+      second(place[k], 0.2, k, 0.0);
+    }
+    EXPECT_GE(recognised, 8);
+    EXPECT_GE(short_of_it, 7);
+  }
+}
+
 // After a restart the network adopts the experience map's experiences: those it made itself
 // (same id, template and cell) keep their boundaries and stay checked; the others are unchecked.
 TEST(PoseCellNetwork, AdoptedMapKeepsTheBoundariesOfTheNetworksOwnExperiences) {
@@ -448,7 +493,10 @@ TEST(PoseCellNetwork, SavedAndLoadedNetworkKeepsTheBoundaries) {
 }
 
 TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
-  PoseCellNetwork a(SmallConfig());
+  PoseCellConfig cfg = SmallConfig();
+  cfg.exp_view_offset = true;  // its odometry and recent views are state too
+  cfg.exp_view_offset_frames = 8;
+  PoseCellNetwork a(cfg);
   uint32_t next = 0;
   auto frame_input = [&](int i, uint32_t& tid, bool& is_new) {
     if (i % 7 == 3 && next > 12) {
@@ -463,25 +511,31 @@ TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
     uint32_t tid;
     bool is_new;
     frame_input(i, tid, is_new);
-    a.ProcessFrame(0.6 + 0.1 * std::sin(i), 0.2 * std::cos(0.3 * i), 0.1 * (1 + i % 3), tid, is_new, 0.05 * (i % 4));
+    a.ProcessFrame(0.6 + 0.1 * std::sin(i), 0.2 * std::cos(0.3 * i), 0.1 * (1 + i % 3), tid, is_new, 0.05 * (i % 4),
+                   nullptr, 0.01 * (i % 5));
   }
-  PoseCellNetwork b(SmallConfig());
+  PoseCellNetwork b(cfg);
   b.LoadState(a.SaveState());
   EXPECT_EQ(b.SaveState().SerializeAsString(), a.SaveState().SerializeAsString());
+  int offsets = 0;
   for (int i = 60; i < 160; ++i) {
     uint32_t tid;
     bool is_new;
     frame_input(i, tid, is_new);
     const double v = 0.6 + 0.1 * std::sin(i), w = 0.2 * std::cos(0.3 * i), dt = 0.1 * (1 + i % 3);
-    const Action x = a.ProcessFrame(v, w, dt, tid, is_new, 0.05 * (i % 4));
-    const Action y = b.ProcessFrame(v, w, dt, tid, is_new, 0.05 * (i % 4));
+    const Action x = a.ProcessFrame(v, w, dt, tid, is_new, 0.05 * (i % 4), nullptr, 0.01 * (i % 5));
+    const Action y = b.ProcessFrame(v, w, dt, tid, is_new, 0.05 * (i % 4), nullptr, 0.01 * (i % 5));
     ASSERT_EQ(x.kind, y.kind) << i;
+    ASSERT_EQ(x.offset_x_m, y.offset_x_m) << i;
+    ASSERT_EQ(x.offset_y_m, y.offset_y_m) << i;
+    offsets += x.offset_x_m != 0.0;
     ASSERT_EQ(x.experience_id, y.experience_id) << i;
     ASSERT_EQ(x.from_experience_id, y.from_experience_id) << i;
     ASSERT_EQ(x.sequence, y.sequence) << i;
   }
   EXPECT_EQ(a.BestPose().x, b.BestPose().x);
   EXPECT_GT(a.experience_count(), 10u);
+  EXPECT_GT(offsets, 0);
 }
 
 TEST(PoseCellNetwork, RejectsNonFiniteInputAndTemplateIdJumps) {
@@ -496,6 +550,8 @@ TEST(PoseCellNetwork, RejectsNonFiniteInputAndTemplateIdJumps) {
   EXPECT_THROW(net.ProcessFrame(0.1, 0.0, nan, 1, true, 0.0), std::invalid_argument);
   EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, nan), std::invalid_argument);
   EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 5, true, 0.0), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, 0.0, nullptr, nan), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, 0.0, nullptr, -0.1), std::invalid_argument);
   EXPECT_EQ(net.SaveState().SerializeAsString(), before);
   EXPECT_NO_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, 0.0));
 }
@@ -509,8 +565,16 @@ TEST(PoseCellNetwork, LoadRefusesStateOfOtherDimensionsOrInconsistentIds) {
   EXPECT_THROW(b.LoadState(a.SaveState()), std::invalid_argument);
   proto::State bad = a.SaveState();
   bad.mutable_experiences(0)->set_template_id(7);
-  PoseCellNetwork c(SmallConfig());
-  EXPECT_THROW(c.LoadState(bad), std::invalid_argument);
+  proto::State unknown_view = a.SaveState();
+  unknown_view.add_recent_views()->set_template_id(7);
+  proto::State lost = a.SaveState();
+  lost.mutable_experiences(0)->set_odometry_x(std::numeric_limits<double>::infinity());
+  proto::State negative = a.SaveState();
+  negative.add_recent_views()->set_difference(-1.0);
+  for (const proto::State& s : {bad, unknown_view, lost, negative}) {
+    PoseCellNetwork c(SmallConfig());
+    EXPECT_THROW(c.LoadState(s), std::invalid_argument);
+  }
 }
 
 TEST(PoseCellNetwork, ConfigValidationNamesTheKey) {
