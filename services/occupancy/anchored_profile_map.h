@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "services/occupancy/occupancy_grid.h"
-#include "services/occupancy/pose2d.h"
+#include "common/math/pose2d.h"
 #include "services/occupancy/proto/occupancy_state.pb.h"
 #include "services/occupancy/radial_obstacle_profile.h"
 

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "common/config/config_error.h"
-#include "services/occupancy/pose2d.h"
+#include "common/math/pose2d.h"
 #include "services/occupancy/radial_obstacle_profile.h"
 
 namespace rslam::occupancy {

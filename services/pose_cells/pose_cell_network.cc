@@ -48,18 +48,6 @@ inline int Wrap(int i, int n) {
   return i < 0 ? i + n : i;
 }
 
-// b in a's frame, and a then b: planar poses (x, y, th).
-template <class Pose>
-Pose Between(const Pose& a, const Pose& b) {
-  const double c = std::cos(a.th), s = std::sin(a.th), dx = b.x - a.x, dy = b.y - a.y;
-  return {c * dx + s * dy, -s * dx + c * dy, b.th - a.th};
-}
-template <class Pose>
-Pose Compose(const Pose& a, const Pose& b) {
-  const double c = std::cos(a.th), s = std::sin(a.th);
-  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, a.th + b.th};
-}
-
 inline double WrapReal(double v, double n) {
   v = std::fmod(v, n);
   if (v < 0) v += n;
@@ -827,7 +815,7 @@ std::optional<Eigen::Vector2d> PoseCellNetwork::ViewOffset(uint32_t recognised) 
     there = nearest;
   }
   if (!best) return std::nullopt;
-  const OdometryPose offset = Compose(Between(e.odometry, there->odometry), Between(best->odometry, odometry_));
+  const Pose2D offset = Compose(Between(e.odometry, there->odometry), Between(best->odometry, odometry_));
   return Eigen::Vector2d(offset.x, offset.y);
 }
 
@@ -959,9 +947,9 @@ Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_r
 }
 
 void PoseCellNetwork::DeadReckon(double distance_m, double turn_rad) {
-  odometry_.x += distance_m * std::cos(odometry_.th);
-  odometry_.y += distance_m * std::sin(odometry_.th);
-  odometry_.th = std::remainder(odometry_.th + turn_rad, kTwoPi);
+  odometry_.x += distance_m * std::cos(odometry_.theta);
+  odometry_.y += distance_m * std::sin(odometry_.theta);
+  odometry_.theta = WrapAngle(odometry_.theta + turn_rad);
 }
 
 void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& experiences,
@@ -1120,7 +1108,7 @@ proto::State PoseCellNetwork::SaveState() const {
     pe->set_odometry_known(e.odometry_known);
     pe->set_odometry_x(e.odometry.x);
     pe->set_odometry_y(e.odometry.y);
-    pe->set_odometry_th(e.odometry.th);
+    pe->set_odometry_th(e.odometry.theta);
   }
   for (const RecentView& v : recent_views_) {
     auto* pv = s.add_recent_views();
@@ -1128,11 +1116,11 @@ proto::State PoseCellNetwork::SaveState() const {
     pv->set_difference(v.difference);
     pv->set_odometry_x(v.odometry.x);
     pv->set_odometry_y(v.odometry.y);
-    pv->set_odometry_th(v.odometry.th);
+    pv->set_odometry_th(v.odometry.theta);
   }
   s.set_odometry_x(odometry_.x);
   s.set_odometry_y(odometry_.y);
-  s.set_odometry_th(odometry_.th);
+  s.set_odometry_th(odometry_.theta);
   for (uint32_t a = 0; a < links_of_.size(); ++a) {
     for (uint32_t b : links_of_[a]) {
       if (a < b) {

@@ -38,6 +38,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/math/pose2d.h"
 #include "services/pose_cells/boundary_match.h"
 #include "services/pose_cells/pose_cell_action.h"
 #include "services/pose_cells/pose_cell_config.h"
@@ -164,10 +165,6 @@ class PoseCellNetwork {
   // OpenRatSLAM subtracts pc_vt_restore from every template's decay on every view update
   // (clamped at vt_active_decay); done lazily here.
   double EffectiveDecay(const ViewAssociation& v) const;
-  // Dead-reckoned pose of the odometry this network integrated (exp_view_offset).
-  struct OdometryPose {
-    double x = 0.0, y = 0.0, th = 0.0;
-  };
   struct ExperienceCell {
     double pc_x, pc_y, pc_th;
     uint32_t template_id;
@@ -175,12 +172,12 @@ class PoseCellNetwork {
     bool boundary_known = false;  // boundary measured (not adopted from the map)
     FloorBoundary boundary;
     bool odometry_known = false;  // made by this network (not adopted from the map)
-    OdometryPose odometry;        // odometry_ when made
+    Pose2D odometry;              // odometry_ when made
   };
   struct RecentView {
     uint32_t template_id;
     double difference;
-    OdometryPose odometry;  // odometry_ at its frame
+    Pose2D odometry;  // odometry_ at its frame
   };
   // exp_view_offset: where the robot stands in experience `recognised`'s frame (pose_cell_config.h);
   // nullopt when no recent view's template has an experience made near enough in time.
@@ -292,7 +289,7 @@ class PoseCellNetwork {
   uint64_t next_sequence_ = 0;
   uint64_t frames_processed_ = 0;
   uint64_t view_updates_ = 0;
-  OdometryPose odometry_;
+  Pose2D odometry_;  // dead-reckoned pose of the odometry this network integrated (exp_view_offset)
   std::deque<RecentView> recent_views_;  // the last exp_view_offset_frames, oldest first
   std::vector<double> avg_x_, avg_y_, avg_th_;  // population-vector sums, preallocated
   std::vector<float> padded_row_;               // ConvolveX scratch: one row with wrapped margins

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "services/occupancy/inverse_perspective_map.h"
-#include "services/occupancy/pose2d.h"
+#include "common/math/pose2d.h"
 
 namespace rslam::occupancy::testing {
 

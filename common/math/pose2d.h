@@ -1,12 +1,12 @@
 #pragma once
-// A planar pose (metres, radians) and the two compositions the occupancy mapper needs to anchor
-// profiles to experiences.
+// A planar pose (metres, radians) and its two compositions: the occupancy mapper anchors profiles
+// to experiences with them, the pose cells relate recent views to a recognised experience.
 
 #include <cmath>
 
 #include "common/math/angle.h"
 
-namespace rslam::occupancy {
+namespace rslam {
 
 struct Pose2D {
   double x = 0.0;
@@ -31,4 +31,4 @@ inline bool IsFinite(const Pose2D& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta);
 }
 
-}  // namespace rslam::occupancy
+}  // namespace rslam
