@@ -48,6 +48,14 @@ inline int Wrap(int i, int n) {
   return i < 0 ? i + n : i;
 }
 
+void SavePose(const Pose2D& p, proto::Pose& out) {
+  out.set_x(p.x);
+  out.set_y(p.y);
+  out.set_theta(p.theta);
+}
+
+Pose2D LoadPose(const proto::Pose& p) { return {p.x(), p.y(), p.theta()}; }
+
 inline double WrapReal(double v, double n) {
   v = std::fmod(v, n);
   if (v < 0) v += n;
@@ -1105,22 +1113,15 @@ proto::State PoseCellNetwork::SaveState() const {
       pe->add_boundary_xy(p.x());
       pe->add_boundary_xy(p.y());
     }
-    pe->set_odometry_known(e.odometry_known);
-    pe->set_odometry_x(e.odometry.x);
-    pe->set_odometry_y(e.odometry.y);
-    pe->set_odometry_th(e.odometry.theta);
+    if (e.odometry_known) SavePose(e.odometry, *pe->mutable_odometry());
   }
   for (const RecentView& v : recent_views_) {
     auto* pv = s.add_recent_views();
     pv->set_template_id(v.template_id);
     pv->set_difference(v.difference);
-    pv->set_odometry_x(v.odometry.x);
-    pv->set_odometry_y(v.odometry.y);
-    pv->set_odometry_th(v.odometry.theta);
+    SavePose(v.odometry, *pv->mutable_odometry());
   }
-  s.set_odometry_x(odometry_.x);
-  s.set_odometry_y(odometry_.y);
-  s.set_odometry_th(odometry_.theta);
+  SavePose(odometry_, *s.mutable_odometry());
   for (uint32_t a = 0; a < links_of_.size(); ++a) {
     for (uint32_t b : links_of_[a]) {
       if (a < b) {
@@ -1187,17 +1188,14 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
       fail("experience boundary is not a list of points");
     for (float v : e.boundary_xy())
       if (!std::isfinite(v)) fail("experience boundary point not finite");
-    if (!std::isfinite(e.odometry_x()) || !std::isfinite(e.odometry_y()) || !std::isfinite(e.odometry_th()))
-      fail("experience odometry pose not finite");
+    if (!IsFinite(LoadPose(e.odometry()))) fail("experience odometry pose not finite");
   }
   for (const auto& v : s.recent_views()) {
     if (v.template_id() >= n_views) fail("recent view refers to unknown template");
-    if (!std::isfinite(v.difference()) || v.difference() < 0 || !std::isfinite(v.odometry_x()) ||
-        !std::isfinite(v.odometry_y()) || !std::isfinite(v.odometry_th()))
+    if (!std::isfinite(v.difference()) || v.difference() < 0 || !IsFinite(LoadPose(v.odometry())))
       fail("recent view not finite");
   }
-  if (!std::isfinite(s.odometry_x()) || !std::isfinite(s.odometry_y()) || !std::isfinite(s.odometry_th()))
-    fail("odometry pose not finite");
+  if (!IsFinite(LoadPose(s.odometry()))) fail("odometry pose not finite");
   for (const auto& l : s.links()) {
     if (l.from_experience_id() >= n_exps || l.to_experience_id() >= n_exps) fail("link to unknown experience");
   }
@@ -1230,13 +1228,12 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
     FloorBoundary boundary;
     for (int i = 0; i + 1 < e.boundary_xy_size(); i += 2) boundary.emplace_back(e.boundary_xy(i), e.boundary_xy(i + 1));
     experiences_.push_back({e.pc_x(), e.pc_y(), e.pc_th(), e.template_id(), e.created_frame(), e.boundary_known(),
-                            std::move(boundary), e.odometry_known(), {e.odometry_x(), e.odometry_y(), e.odometry_th()}});
+                            std::move(boundary), e.has_odometry(), LoadPose(e.odometry())});
   }
   recent_views_.clear();
-  for (const auto& v : s.recent_views())
-    recent_views_.push_back({v.template_id(), v.difference(), {v.odometry_x(), v.odometry_y(), v.odometry_th()}});
+  for (const auto& v : s.recent_views()) recent_views_.push_back({v.template_id(), v.difference(), LoadPose(v.odometry())});
   while (recent_views_.size() > static_cast<size_t>(config_.exp_view_offset_frames)) recent_views_.pop_front();
-  odometry_ = {s.odometry_x(), s.odometry_y(), s.odometry_th()};
+  odometry_ = LoadPose(s.odometry());
   links_of_.assign(n_exps, {});
   for (const auto& l : s.links()) {
     links_of_[l.from_experience_id()].push_back(l.to_experience_id());

@@ -79,6 +79,15 @@ class PoseCellsServiceTest : public ::testing::Test {
     return out;
   }
 
+  // Each frame's odometry then its view, then the actions of them all.
+  std::vector<msg::PoseCellAction> Drive(const std::vector<ScriptedFrame>& script) {
+    for (const ScriptedFrame& f : script) {
+      velocity_pub_->Publish(f.velocity);
+      view_pub_->Publish(f.view);
+    }
+    return AwaitActions(script.size());
+  }
+
   std::optional<msg::ServiceStatus> AwaitStatus(uint64_t min_rejected, std::chrono::milliseconds timeout = 5s) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     while (std::chrono::steady_clock::now() < deadline) {
@@ -156,11 +165,7 @@ TEST_F(PoseCellsServiceTest, BoundaryCheckRefusesTheLoopClosureWhenTheWallsDisag
     script[i].velocity.boundary_measured = true;
     script[i].velocity.boundary = Message(i < testing::kLapFrames ? testing::CornerScan() : testing::CorridorScan());
   }
-  for (const ScriptedFrame& f : script) {
-    velocity_pub_->Publish(f.velocity);
-    view_pub_->Publish(f.view);
-  }
-  const auto actions = AwaitActions(frames);
+  const auto actions = Drive(script);
   ASSERT_EQ(actions.size(), static_cast<size_t>(frames)) << service->Output();
   // The library with the same check and boundaries decides alike; without them it would link.
   pose_cells::PoseCellConfig config;
@@ -196,11 +201,7 @@ TEST_F(PoseCellsServiceTest, ViewOffsetRidesOnTheRecognitionsAsTheLibraryMeasure
   const int frames = testing::kLapFrames + 10;
   std::vector<ScriptedFrame> script = testing::ScriptedLoop(frames);
   for (int i = 0; i < frames; ++i) script[i].view.difference = 0.01 * ((i * 7) % 5);
-  for (const ScriptedFrame& f : script) {
-    velocity_pub_->Publish(f.velocity);
-    view_pub_->Publish(f.view);
-  }
-  const auto actions = AwaitActions(frames);
+  const auto actions = Drive(script);
   ASSERT_EQ(actions.size(), static_cast<size_t>(frames)) << service->Output();
   pose_cells::PoseCellConfig config;
   config.exp_view_offset = true;
@@ -233,12 +234,8 @@ TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
   script[9].velocity.boundary_measured = true;
   script[9].velocity.boundary = {{0.5f, std::numeric_limits<float>::quiet_NaN()}};
   script[10].view.difference = -1.0;
-  for (const ScriptedFrame& f : script) {
-    velocity_pub_->Publish(f.velocity);
-    view_pub_->Publish(f.view);
-  }
   // Every frame still gives its action: a refused side is processed as missing.
-  const auto actions = AwaitActions(script.size());
+  const auto actions = Drive(script);
   ASSERT_EQ(actions.size(), script.size()) << service->Output();
   for (size_t i = 0; i < actions.size(); ++i) {
     EXPECT_EQ(actions[i].action_seq, i);

@@ -568,7 +568,7 @@ TEST(PoseCellNetwork, LoadRefusesStateOfOtherDimensionsOrInconsistentIds) {
   proto::State unknown_view = a.SaveState();
   unknown_view.add_recent_views()->set_template_id(7);
   proto::State lost = a.SaveState();
-  lost.mutable_experiences(0)->set_odometry_x(std::numeric_limits<double>::infinity());
+  lost.mutable_experiences(0)->mutable_odometry()->set_x(std::numeric_limits<double>::infinity());
   proto::State negative = a.SaveState();
   negative.add_recent_views()->set_difference(-1.0);
   for (const proto::State& s : {bad, unknown_view, lost, negative}) {
