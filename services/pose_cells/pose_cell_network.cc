@@ -702,12 +702,15 @@ void PoseCellNetwork::InjectEnergy(int x, int y, int th, double energy) {
 // Views and experiences
 
 void PoseCellNetwork::ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id,
-                                    double relative_angle_rad) const {
+                                    double relative_angle_rad, double view_difference) const {
   if (!std::isfinite(vtrans)) throw std::invalid_argument("pose cells: vtrans is not finite");
   if (!std::isfinite(vrot)) throw std::invalid_argument("pose cells: vrot is not finite");
   if (!std::isfinite(dt) || dt < 0) throw std::invalid_argument("pose cells: dt must be finite and >= 0");
   if (!std::isfinite(relative_angle_rad)) {
     throw std::invalid_argument("pose cells: view relative angle is not finite");
+  }
+  if (!std::isfinite(view_difference) || view_difference < 0) {
+    throw std::invalid_argument("pose cells: view difference must be finite and >= 0");
   }
   if (template_id > views_.size()) {
     throw std::invalid_argument("pose cells: template id " + std::to_string(template_id) +
@@ -917,10 +920,7 @@ Action PoseCellNetwork::ProcessFrame(double vtrans_mps, double vrot_radps, doubl
                                      uint32_t template_id, bool template_is_new,
                                      double relative_angle_rad, const FloorBoundary* boundary,
                                      double view_difference) {
-  ValidateFrame(vtrans_mps, vrot_radps, dt_s, template_id, relative_angle_rad);
-  if (!std::isfinite(view_difference) || view_difference < 0) {
-    throw std::invalid_argument("pose cells: view difference must be finite and >= 0");
-  }
+  ValidateFrame(vtrans_mps, vrot_radps, dt_s, template_id, relative_angle_rad, view_difference);
   InjectView(template_id, relative_angle_rad, template_is_new);
   Step(vtrans_mps, vrot_radps, dt_s);
   DeadReckon(vtrans_mps * dt_s, vrot_radps * dt_s);

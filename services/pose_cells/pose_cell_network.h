@@ -259,8 +259,8 @@ class PoseCellNetwork {
   void PlacePacket(const PoseCellPosition& cell);
   void CreateExperience(const FloorBoundary* boundary);
   void DeadReckon(double distance_m, double turn_rad);
-  void ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id,
-                     double relative_angle_rad) const;
+  void ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id, double relative_angle_rad,
+                     double view_difference = 0.0) const;
 
   const PoseCellConfig config_;
   const int dim_xy_;
