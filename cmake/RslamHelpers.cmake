@@ -59,3 +59,25 @@ function(rslam_add_benchmark)
   target_link_libraries(${B_NAME} PRIVATE ${B_LIBS} benchmark::benchmark benchmark::benchmark_main)
   target_compile_definitions(${B_NAME} PRIVATE RSLAM_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 endfunction()
+
+# rslam_add_protos(TARGET a.proto ...): compiles .proto files (paths relative to the current
+# folder) into TARGET. protoc runs from the repository root, so a proto imports another by its
+# repository path ("common/math/pose2d.proto") and its header is included by its repository path
+# ("services/explorer/proto/explorer_state.pb.h"), generated under <build>/generated.
+function(rslam_add_protos target)
+  set(out ${PROJECT_BINARY_DIR}/generated)
+  foreach(proto ${ARGN})
+    file(RELATIVE_PATH rel ${PROJECT_SOURCE_DIR} ${CMAKE_CURRENT_SOURCE_DIR}/${proto})
+    string(REGEX REPLACE "\\.proto$" "" stem ${rel})
+    add_custom_command(
+      OUTPUT ${out}/${stem}.pb.cc ${out}/${stem}.pb.h
+      COMMAND ${CMAKE_COMMAND} -E make_directory ${out}
+      COMMAND protobuf::protoc --cpp_out=${out} -I ${PROJECT_SOURCE_DIR} ${PROJECT_SOURCE_DIR}/${rel}
+      DEPENDS ${PROJECT_SOURCE_DIR}/${rel} protobuf::protoc
+      COMMENT "protoc ${rel}"
+      VERBATIM)
+    target_sources(${target} PRIVATE ${out}/${stem}.pb.cc)
+  endforeach()
+  target_include_directories(${target} PUBLIC ${out})
+  target_link_libraries(${target} PUBLIC protobuf::libprotobuf)
+endfunction()

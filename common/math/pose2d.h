@@ -1,6 +1,6 @@
 #pragma once
-// A planar pose (metres, radians) and its two compositions: the occupancy mapper anchors profiles
-// to experiences with them, the pose cells relate recent views to a recognised experience.
+// A planar pose (metres, radians; theta counter-clockwise from +x) and its two compositions: the
+// one pose type of the services and tools (saved as common/math/pose2d.proto).
 
 #include <cmath>
 

@@ -221,16 +221,16 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         graph_pending_ = true;
         if (!config_.exp_graph_optimisation) SeedLocalRegion(current_, to);
       }
-      const Pose2 dead_reckoned = RobotPose();
+      const Pose2D dead_reckoned = RobotPose();
       SetCurrent(to, a);
       if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
-        accum_facing_ = WrapAngle(dead_reckoned.th_rad +
-                                  config_.exp_heading_correction * WrapAngle(accum_facing_ - dead_reckoned.th_rad));
+        accum_facing_ = WrapAngle(dead_reckoned.theta +
+                                  config_.exp_heading_correction * WrapAngle(accum_facing_ - dead_reckoned.theta));
       }
       if (config_.exp_position_correction < 1.0) {  // at 1 the robot is on the experience (OpenRatSLAM)
         const double keep = 1.0 - config_.exp_position_correction;
-        accum_x_ = keep * (dead_reckoned.x_m - experiences_[to].x_m) + config_.exp_position_correction * accum_x_;
-        accum_y_ = keep * (dead_reckoned.y_m - experiences_[to].y_m) + config_.exp_position_correction * accum_y_;
+        accum_x_ = keep * (dead_reckoned.x - experiences_[to].x_m) + config_.exp_position_correction * accum_x_;
+        accum_y_ = keep * (dead_reckoned.y - experiences_[to].y_m) + config_.exp_position_correction * accum_y_;
       }
       break;
     }
@@ -468,7 +468,7 @@ void ExperienceMap::MergeFrom(const ExperienceMap& other, const std::vector<MapA
   }
 }
 
-Pose2 ExperienceMap::RobotPose() const {
+Pose2D ExperienceMap::RobotPose() const {
   if (!has_current_) return {accum_x_, accum_y_, accum_facing_};
   const Experience& cur = experiences_[current_];
   return {cur.x_m + accum_x_, cur.y_m + accum_y_, accum_facing_};

@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "common/math/angle.h"
+#include "common/math/pose2d.h"
 #include "services/experience_map/experience_action.h"
 #include "services/experience_map/experience_map_config.h"
 #include "services/experience_map/proto/experience_map.pb.h"
@@ -67,10 +68,6 @@ struct PoseGraphResult {
   double largest_change = 0.0;  // over all steps (m or rad)
   int steps = 0;                // Gauss-Newton steps taken
   bool converged = false;       // the last step moved nothing by more than stop_below
-};
-
-struct Pose2 {
-  double x_m = 0.0, y_m = 0.0, th_rad = 0.0;
 };
 
 // A pair of experiences known to be the same place when merging two maps.
@@ -137,7 +134,7 @@ class ExperienceMap {
   bool has_current() const { return has_current_; }
   uint32_t current_id() const { return current_; }
   // Current experience's pose plus the odometry accumulated since it.
-  Pose2 RobotPose() const;
+  Pose2D RobotPose() const;
   uint64_t next_sequence() const { return next_sequence_; }
   // Largest link error (position, m) over the map: how far from consistent the map is.
   double MaxLinkError() const;

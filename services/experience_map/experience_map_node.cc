@@ -170,10 +170,10 @@ class ExperienceMapNode::Mapper {
   void PublishPose(const msg::PoseCellAction& m) {
     msg::ExperiencePose pose;
     pose.header = m.header;
-    const Pose2 robot = map_.RobotPose();
-    pose.x_m = robot.x_m;
-    pose.y_m = robot.y_m;
-    pose.theta_rad = robot.th_rad;
+    const Pose2D robot = map_.RobotPose();
+    pose.x_m = robot.x;
+    pose.y_m = robot.y;
+    pose.theta_rad = robot.theta;
     if (map_.has_current()) {
       const Experience& e = map_.experiences()[map_.current_id()];
       pose.current_experience_id = e.id;

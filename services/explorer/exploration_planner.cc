@@ -6,13 +6,12 @@
 #include <string>
 
 #include "common/math/angle.h"
+#include "common/math/pose2d_proto.h"
 #include "services/explorer/exploration_transform.h"
 
 namespace rslam::explorer {
 
 namespace {
-
-bool IsFinite(const Pose2D& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta); }
 
 // Distance from (px, py) to the segment from (x0, y0) along (sx, sy).
 double DistanceToSegment(double px, double py, double x0, double y0, double sx, double sy) {
@@ -513,9 +512,7 @@ proto::ExplorerState ExplorationPlanner::ToProto() const {
     out->set_y(y);
   }
   if (last_pirouette_) {
-    state.mutable_last_pirouette()->set_x(last_pirouette_->x);
-    state.mutable_last_pirouette()->set_y(last_pirouette_->y);
-    state.mutable_last_pirouette()->set_theta(last_pirouette_->theta);
+    SavePose(*last_pirouette_, state.mutable_last_pirouette());
   }
   return state;
 }
@@ -540,7 +537,7 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
   }
   std::optional<Pose2D> last;
   if (state.has_last_pirouette()) {
-    last = Pose2D{state.last_pirouette().x(), state.last_pirouette().y(), state.last_pirouette().theta()};
+    last = LoadPose(state.last_pirouette());
     if (!IsFinite(*last)) throw std::invalid_argument("explorer state: last pirouette pose not finite");
   }
   set_aside_ = std::move(set_aside);

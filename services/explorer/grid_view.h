@@ -1,21 +1,17 @@
 #pragma once
 // What the explorer reads: a borrowed occupancy grid in the ROS nav_msgs/OccupancyGrid convention
 // (-1 unknown, 0..100 percent occupied, row-major from the lower-left cell at origin), plus the
-// thresholds that classify a cell, and the robot pose type. A cell seen but between the
-// thresholds is uncertain: a wall seen once, or a cell a map correction keeps moving a wall across.
+// thresholds that classify a cell. A cell seen but between the thresholds is uncertain: a wall
+// seen once, or a cell a map correction keeps moving a wall across.
 
 #include <cmath>
 #include <cstdint>
 #include <span>
 #include <stdexcept>
 
-namespace rslam::explorer {
+#include "common/math/pose2d.h"
 
-struct Pose2D {
-  double x = 0.0;
-  double y = 0.0;
-  double theta = 0.0;
-};
+namespace rslam::explorer {
 
 // kUncertain: seen, neither free nor occupied enough (a coarse cell: one that holds such cells and
 // is not a goal, see ExplorerConfig::uncertain_cells_are_goals).

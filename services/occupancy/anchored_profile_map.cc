@@ -4,19 +4,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/math/pose2d_proto.h"
+
 namespace rslam::occupancy {
-
-namespace {
-
-void ToProtoPose(const Pose2D& p, proto::Pose2D* out) {
-  out->set_x(p.x);
-  out->set_y(p.y);
-  out->set_theta(p.theta);
-}
-
-Pose2D FromProtoPose(const proto::Pose2D& p) { return {p.x(), p.y(), p.theta()}; }
-
-}  // namespace
 
 AnchoredProfileMap::AnchoredProfileMap(GridConfig grid, SensorModelConfig sensor)
     : grid_(std::move(grid), std::move(sensor)) {}
@@ -96,8 +86,8 @@ proto::OccupancyState AnchoredProfileMap::ToProto() const {
   for (const AnchoredProfile& p : profiles_) {
     auto* out = state.add_profiles();
     out->set_experience_id(p.experience_id);
-    ToProtoPose(p.offset, out->mutable_offset());
-    ToProtoPose(p.experience_pose, out->mutable_experience_pose());
+    SavePose(p.offset, out->mutable_offset());
+    SavePose(p.experience_pose, out->mutable_experience_pose());
     out->set_first_bearing_rad(p.profile.first_bearing_rad);
     out->set_bin_width_rad(p.profile.bin_width_rad);
     std::string status;
@@ -131,8 +121,8 @@ AnchoredProfileMap AnchoredProfileMap::FromProto(const proto::OccupancyState& st
       throw std::invalid_argument(where + "ranges and statuses differ in length");
     AnchoredProfile p;
     p.experience_id = in.experience_id();
-    p.offset = FromProtoPose(in.offset());
-    p.experience_pose = FromProtoPose(in.experience_pose());
+    p.offset = LoadPose(in.offset());
+    p.experience_pose = LoadPose(in.experience_pose());
     if (!IsFinite(p.offset) || !IsFinite(p.experience_pose)) throw std::invalid_argument(where + "pose not finite");
     p.profile.first_bearing_rad = in.first_bearing_rad();
     p.profile.bin_width_rad = in.bin_width_rad();

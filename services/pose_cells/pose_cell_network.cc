@@ -1,5 +1,6 @@
 #include "services/pose_cells/pose_cell_network.h"
 
+#include "common/math/pose2d_proto.h"
 #include "services/pose_cells/boundary_match.h"
 
 #include <algorithm>
@@ -47,14 +48,6 @@ inline int Wrap(int i, int n) {
   i %= n;
   return i < 0 ? i + n : i;
 }
-
-void SavePose(const Pose2D& p, proto::Pose& out) {
-  out.set_x(p.x);
-  out.set_y(p.y);
-  out.set_theta(p.theta);
-}
-
-Pose2D LoadPose(const proto::Pose& p) { return {p.x(), p.y(), p.theta()}; }
 
 inline double WrapReal(double v, double n) {
   v = std::fmod(v, n);
@@ -672,7 +665,7 @@ PoseCellPosition PoseCellNetwork::UpdateBestPose() {
 }
 
 void PoseCellNetwork::Step(double vtrans_mps, double vrot_radps, double dt_s) {
-  ValidateFrame(vtrans_mps, vrot_radps, dt_s, 0, 0.0);  // before anything changes
+  ValidateFrame(vtrans_mps, vrot_radps, dt_s, {});  // before anything changes
   ExciteInhibitNormalise();
   PathIntegrate(vtrans_mps, vrot_radps, dt_s);
   UpdateBestPose();
@@ -701,25 +694,24 @@ void PoseCellNetwork::InjectEnergy(int x, int y, int th, double energy) {
 // ---------------------------------------------------------------------------------------------
 // Views and experiences
 
-void PoseCellNetwork::ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id,
-                                    double relative_angle_rad, double view_difference) const {
+void PoseCellNetwork::ValidateFrame(double vtrans, double vrot, double dt, const ViewMatch& view) const {
   if (!std::isfinite(vtrans)) throw std::invalid_argument("pose cells: vtrans is not finite");
   if (!std::isfinite(vrot)) throw std::invalid_argument("pose cells: vrot is not finite");
   if (!std::isfinite(dt) || dt < 0) throw std::invalid_argument("pose cells: dt must be finite and >= 0");
-  if (!std::isfinite(relative_angle_rad)) {
+  if (!std::isfinite(view.relative_angle_rad)) {
     throw std::invalid_argument("pose cells: view relative angle is not finite");
   }
-  if (!std::isfinite(view_difference) || view_difference < 0) {
+  if (!std::isfinite(view.difference) || view.difference < 0) {
     throw std::invalid_argument("pose cells: view difference must be finite and >= 0");
   }
-  if (template_id > views_.size()) {
-    throw std::invalid_argument("pose cells: template id " + std::to_string(template_id) +
+  if (view.template_id > views_.size()) {
+    throw std::invalid_argument("pose cells: template id " + std::to_string(view.template_id) +
                                 " skips ahead of the next expected id " + std::to_string(views_.size()));
   }
 }
 
 void PoseCellNetwork::InjectView(uint32_t template_id, double relative_angle_rad, bool is_new) {
-  ValidateFrame(0.0, 0.0, 0.0, template_id, relative_angle_rad);
+  ValidateFrame(0.0, 0.0, 0.0, {template_id, is_new, relative_angle_rad});
   (void)is_new;  // a template is new exactly when its id is the next one; the flag is advisory
   const double gamma_cells = relative_angle_rad / kTwoPi * dim_th_;
   const double active_decay = config_.vt_active_decay;
@@ -916,16 +908,14 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
   return action;
 }
 
-Action PoseCellNetwork::ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s,
-                                     uint32_t template_id, bool template_is_new,
-                                     double relative_angle_rad, const FloorBoundary* boundary,
-                                     double view_difference) {
-  ValidateFrame(vtrans_mps, vrot_radps, dt_s, template_id, relative_angle_rad, view_difference);
-  InjectView(template_id, relative_angle_rad, template_is_new);
+Action PoseCellNetwork::ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s, const ViewMatch& view,
+                                     const FloorBoundary* boundary) {
+  ValidateFrame(vtrans_mps, vrot_radps, dt_s, view);
+  InjectView(view.template_id, view.relative_angle_rad, view.is_new);
   Step(vtrans_mps, vrot_radps, dt_s);
   DeadReckon(vtrans_mps * dt_s, vrot_radps * dt_s);
   if (config_.exp_view_offset) {
-    recent_views_.push_back({template_id, view_difference, odometry_});
+    recent_views_.push_back({view.template_id, view.difference, odometry_});
     if (recent_views_.size() > static_cast<size_t>(config_.exp_view_offset_frames)) recent_views_.pop_front();
   }
   ++frames_processed_;
@@ -944,7 +934,7 @@ void PoseCellNetwork::SkipTemplates(uint32_t next_template_id) {
 
 Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_radps, double dt_s,
                                                 const FloorBoundary* boundary) {
-  ValidateFrame(vtrans_mps, vrot_radps, dt_s, 0, 0.0);
+  ValidateFrame(vtrans_mps, vrot_radps, dt_s, {});
   Step(vtrans_mps, vrot_radps, dt_s);
   DeadReckon(vtrans_mps * dt_s, vrot_radps * dt_s);
   ++frames_processed_;
@@ -1113,15 +1103,15 @@ proto::State PoseCellNetwork::SaveState() const {
       pe->add_boundary_xy(p.x());
       pe->add_boundary_xy(p.y());
     }
-    if (e.odometry_known) SavePose(e.odometry, *pe->mutable_odometry());
+    if (e.odometry_known) SavePose(e.odometry, pe->mutable_odometry());
   }
   for (const RecentView& v : recent_views_) {
     auto* pv = s.add_recent_views();
     pv->set_template_id(v.template_id);
     pv->set_difference(v.difference);
-    SavePose(v.odometry, *pv->mutable_odometry());
+    SavePose(v.odometry, pv->mutable_odometry());
   }
-  SavePose(odometry_, *s.mutable_odometry());
+  SavePose(odometry_, s.mutable_odometry());
   for (uint32_t a = 0; a < links_of_.size(); ++a) {
     for (uint32_t b : links_of_[a]) {
       if (a < b) {

@@ -62,6 +62,14 @@ struct MapExperience {
   PoseCellPosition cell;  // pose-cell position the experience was created at
 };
 
+// The template learner's match for one frame, as the network uses it.
+struct ViewMatch {
+  uint32_t template_id = 0;         // dense from 0
+  bool is_new = false;              // the learner just learnt it
+  double relative_angle_rad = 0.0;  // the view's orientation offset gamma (001 eq. 4)
+  double difference = 0.0;          // the match's difference (0 = identical); exp_view_offset compares it
+};
+
 class PoseCellNetwork {
  public:
   explicit PoseCellNetwork(const PoseCellConfig& config);
@@ -69,17 +77,13 @@ class PoseCellNetwork {
   PoseCellNetwork& operator=(const PoseCellNetwork&) = delete;
 
   // The single entry point: one call per camera frame with that frame's odometry (vtrans m/s,
-  // vrot rad/s over dt s) and view match (template ids dense from 0; template_is_new when the
-  // template learner just learnt it). Returns the action for the experience map.
+  // vrot rad/s over dt s) and view match. Returns the action for the experience map.
   // boundary: the frame's floor boundary, kept with an experience made now and compared with an
   // old experience's before linking to it (exp_boundary_check); nullptr: not measured.
-  // view_difference: the view's match difference (0 = identical), which exp_view_offset compares
-  // over the last frames.
   // Throws std::invalid_argument (state unchanged) on non-finite or negative dt or difference,
   // non-finite velocities or angle, or a template id beyond the next expected id.
-  Action ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s, uint32_t template_id,
-                      bool template_is_new, double relative_angle_rad, const FloorBoundary* boundary = nullptr,
-                      double view_difference = 0.0);
+  Action ProcessFrame(double vtrans_mps, double vrot_radps, double dt_s, const ViewMatch& view,
+                      const FloorBoundary* boundary = nullptr);
 
   // A frame whose view never arrived (the template learner restarted): path integration only.
   // The current view counts as unchanged, so nothing is injected and no view change drives the
@@ -259,8 +263,7 @@ class PoseCellNetwork {
   void PlacePacket(const PoseCellPosition& cell);
   void CreateExperience(const FloorBoundary* boundary);
   void DeadReckon(double distance_m, double turn_rad);
-  void ValidateFrame(double vtrans, double vrot, double dt, uint32_t template_id, double relative_angle_rad,
-                     double view_difference = 0.0) const;
+  void ValidateFrame(double vtrans, double vrot, double dt, const ViewMatch& view) const;
 
   const PoseCellConfig config_;
   const int dim_xy_;

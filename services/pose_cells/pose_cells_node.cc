@@ -189,8 +189,10 @@ class PoseCellsNode::Processor {
     }
     Action action;
     try {
-      action = view ? network_.ProcessFrame(vtrans, vrot, dt, view->template_id, view->is_new,
-                                            view->relative_angle_rad, seen, view->difference)
+      action = view ? network_.ProcessFrame(vtrans, vrot, dt,
+                                            {view->template_id, view->is_new, view->relative_angle_rad,
+                                             view->difference},
+                                            seen)
                     : network_.ProcessFrameWithoutView(vtrans, vrot, dt, seen);
     } catch (const std::invalid_argument& e) {
       context_.Reject("frame", e.what());

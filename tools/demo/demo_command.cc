@@ -166,14 +166,14 @@ int RunDemo(const DemoOptions& options) {
   LoadConfigSection(root, "sim", sim_config);
   const std::string world_path = sim::ResolveWorldPath(sim_config.sim.world_yaml);
   const sim::WorldMap world = sim::WorldMap::LoadFromYaml(world_path);
-  const sim::Pose2D start = sim::StartPoseOf(sim_config, world);
+  const Pose2D start = sim::StartPoseOf(sim_config, world);
   const std::vector<Eigen::Vector2i> reachable =
       ReachableFootprint(world, start, sim_config.sim.motion.robot_radius_m);
   // The map frame in the world (the experience map's first facing is OpenRatSLAM's 90 degrees
   // unless configured).
   experience_map::ExperienceMapNodeConfig map_config;
   LoadConfigSection(root, "experience_map", map_config);
-  const sim::Pose2D map_origin = MapOrigin(start, map_config.map.exp_initial_em_deg * std::numbers::pi / 180);
+  const Pose2D map_origin = MapOrigin(start, map_config.map.exp_initial_em_deg * std::numbers::pi / 180);
 
   std::cout << "rslam demo: " << world_path << " (" << reachable.size() << " reachable free cells), start ("
             << start.x << ", " << start.y << ", " << start.theta << "), " << dds << " domain " << domain
@@ -290,7 +290,7 @@ int RunDemo(const DemoOptions& options) {
   const auto experience_truth = ExperienceGroundTruth(seen);
   // The grid judged where the map's shape puts it (a rigid fit of the experiences to their ground
   // truth) and, stricter, where the start pose alone puts it (any turn of the whole map counts).
-  const std::optional<sim::Pose2D> map_to_world =
+  const std::optional<Pose2D> map_to_world =
       seen.map ? FitMapToWorld(seen.map->experiences, experience_truth) : std::nullopt;
   std::optional<GridComparison> grid_check, grid_at_start;
   if (seen.grid) {

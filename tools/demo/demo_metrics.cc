@@ -12,11 +12,11 @@
 
 namespace rslam::demo {
 
-sim::Pose2D MapOrigin(const sim::Pose2D& start, double initial_facing_rad) {
+Pose2D MapOrigin(const Pose2D& start, double initial_facing_rad) {
   return {start.x, start.y, WrapAngle(start.theta - initial_facing_rad)};
 }
 
-sim::Pose2D MapToWorld(const sim::Pose2D& origin, double x, double y) {
+Pose2D MapToWorld(const Pose2D& origin, double x, double y) {
   const double c = std::cos(origin.theta), s = std::sin(origin.theta);
   return {origin.x + c * x - s * y, origin.y + s * x + c * y, origin.theta};
 }
@@ -24,7 +24,7 @@ sim::Pose2D MapToWorld(const sim::Pose2D& origin, double x, double y) {
 namespace {
 
 // World point to the map frame.
-Eigen::Vector2d WorldToMap(const sim::Pose2D& origin, const Eigen::Vector2d& p) {
+Eigen::Vector2d WorldToMap(const Pose2D& origin, const Eigen::Vector2d& p) {
   const double c = std::cos(origin.theta), s = std::sin(origin.theta);
   const double dx = p.x() - origin.x, dy = p.y() - origin.y;
   return {c * dx + s * dy, -s * dx + c * dy};
@@ -41,7 +41,7 @@ int GridValueAt(const msg::OccupancyGrid& grid, const Eigen::Vector2d& p) {
 
 }  // namespace
 
-std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, const sim::Pose2D& start,
+std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, const Pose2D& start,
                                                 double robot_radius_m) {
   const std::vector<Eigen::Vector2i> centres = world.ReachableFreeCells({start.x, start.y}, robot_radius_m);
   cv::Mat mask = cv::Mat::zeros(world.height(), world.width(), CV_8U);
@@ -56,7 +56,7 @@ std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, cons
 }
 
 GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable,
-                                    const sim::Pose2D& map_origin, const msg::OccupancyGrid& grid, double tolerance_m) {
+                                    const Pose2D& map_origin, const msg::OccupancyGrid& grid, double tolerance_m) {
   if (grid.cells.size() != static_cast<size_t>(grid.width) * grid.height || !(grid.resolution_m > 0))
     throw std::invalid_argument("occupancy grid: cells do not match width x height, or bad resolution");
   GridComparison out;
@@ -75,7 +75,7 @@ GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const 
       const bool occupied = v >= kOccupiedAtLeast;
       if (!free && !occupied) continue;
       ++out.marked_cells;
-      const sim::Pose2D w = MapToWorld(map_origin, grid.origin_x_m + (gx + 0.5) * grid.resolution_m,
+      const Pose2D w = MapToWorld(map_origin, grid.origin_x_m + (gx + 0.5) * grid.resolution_m,
                                        grid.origin_y_m + (gy + 0.5) * grid.resolution_m);
       const Eigen::Vector2i centre = world.WorldToCell({w.x, w.y});
       bool agrees = false;
@@ -94,10 +94,10 @@ GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const 
   return out;
 }
 
-std::map<uint32_t, sim::Pose2D> ExperienceGroundTruth(const DemoObservations& seen) {
-  std::map<uint64_t, sim::Pose2D> truth_by_frame;
+std::map<uint32_t, Pose2D> ExperienceGroundTruth(const DemoObservations& seen) {
+  std::map<uint64_t, Pose2D> truth_by_frame;
   for (const auto& t : seen.ground_truth) truth_by_frame[t.frame_seq] = {t.x, t.y, t.theta};
-  std::map<uint32_t, sim::Pose2D> out;
+  std::map<uint32_t, Pose2D> out;
   for (const auto& [id, frame] : seen.experience_first_frame) {
     const auto it = truth_by_frame.find(frame);
     if (it != truth_by_frame.end()) out[id] = it->second;
@@ -105,8 +105,8 @@ std::map<uint32_t, sim::Pose2D> ExperienceGroundTruth(const DemoObservations& se
   return out;
 }
 
-std::optional<sim::Pose2D> FitMapToWorld(std::span<const msg::Experience> experiences,
-                                         const std::map<uint32_t, sim::Pose2D>& experience_truth) {
+std::optional<Pose2D> FitMapToWorld(std::span<const msg::Experience> experiences,
+                                         const std::map<uint32_t, Pose2D>& experience_truth) {
   // The SE(2) alignment of `rslam eval trajectory` (Umeyama, no scale), experiences paired by id.
   std::map<uint32_t, eval::StampedPose2D> in_map;
   for (const auto& e : experiences)
@@ -114,19 +114,19 @@ std::optional<sim::Pose2D> FitMapToWorld(std::span<const msg::Experience> experi
   std::vector<eval::StampedPose2D> estimate, truth;
   for (const auto& [id, pose] : in_map) {
     estimate.push_back(pose);
-    const sim::Pose2D& w = experience_truth.at(id);
+    const Pose2D& w = experience_truth.at(id);
     truth.push_back({static_cast<int64_t>(id), w.x, w.y, {}});
   }
   try {
     const eval::TrajectoryError fit = eval::AlignAndCompare(estimate, truth, false, Duration::zero());
-    return sim::Pose2D{fit.translation_x, fit.translation_y, fit.rotation_rad};
+    return Pose2D{fit.translation_x, fit.translation_y, fit.rotation_rad};
   } catch (const std::invalid_argument&) {
     return std::nullopt;  // fewer than two pairs, or all at one point
   }
 }
 
 LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
-                                   const std::map<uint32_t, sim::Pose2D>& experience_truth, double max_distance_m) {
+                                   const std::map<uint32_t, Pose2D>& experience_truth, double max_distance_m) {
   LoopClosureCheck out;
   out.links = static_cast<uint32_t>(links.size());
   for (const auto& link : links) {

@@ -25,7 +25,7 @@
 #include "rslam/msg/all_messages.h"
 #include "tools/demo/demo_monitor.h"
 #include "tools/eval/trajectory_alignment.h"
-#include "tools/sim/pose2d.h"
+#include "common/math/pose2d.h"
 #include "tools/sim/world_map.h"
 
 namespace rslam::demo {
@@ -37,10 +37,10 @@ inline constexpr int kOccupiedAtLeast = 66; // occupied_thresh 0.65
 // The map frame's pose in the world: its origin at the start position; the robot, facing
 // start.theta in the world, faces initial_facing_rad in the map (the experience map's
 // exp_initial_em_deg).
-sim::Pose2D MapOrigin(const sim::Pose2D& start, double initial_facing_rad);
+Pose2D MapOrigin(const Pose2D& start, double initial_facing_rad);
 
 // Map frame (whose pose in the world is `origin`) to world frame.
-sim::Pose2D MapToWorld(const sim::Pose2D& origin, double x, double y);
+Pose2D MapToWorld(const Pose2D& origin, double x, double y);
 
 struct GridComparison {
   double coverage = 0.0;
@@ -53,11 +53,11 @@ struct GridComparison {
 
 // The world cells (sorted, iy then ix) the robot's disc can cover when its centre moves from the
 // start through free space.
-std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, const sim::Pose2D& start,
+std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, const Pose2D& start,
                                                 double robot_radius_m);
 
 GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable,
-                                    const sim::Pose2D& map_origin, const msg::OccupancyGrid& grid, double tolerance_m);
+                                    const Pose2D& map_origin, const msg::OccupancyGrid& grid, double tolerance_m);
 
 struct LoopClosureCheck {
   uint32_t links = 0;
@@ -68,18 +68,18 @@ struct LoopClosureCheck {
 };
 
 // Ground truth of each experience: the true pose at the frame it was first current.
-std::map<uint32_t, sim::Pose2D> ExperienceGroundTruth(const DemoObservations& seen);
+std::map<uint32_t, Pose2D> ExperienceGroundTruth(const DemoObservations& seen);
 
 // The rigid transform (map frame to world, as MapToWorld takes it) that best overlays the
 // experiences on their ground truth (least squares, no scale: the grid is metric). A map's frame
 // is fixed by its first experience only; a map that is right in shape but turned as a whole (its
 // corrections do not hold the first experience still) is judged by its shape this way. None with
 // fewer than two experiences that have ground truth.
-std::optional<sim::Pose2D> FitMapToWorld(std::span<const msg::Experience> experiences,
-                                         const std::map<uint32_t, sim::Pose2D>& experience_truth);
+std::optional<Pose2D> FitMapToWorld(std::span<const msg::Experience> experiences,
+                                         const std::map<uint32_t, Pose2D>& experience_truth);
 
 LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
-                                   const std::map<uint32_t, sim::Pose2D>& experience_truth, double max_distance_m);
+                                   const std::map<uint32_t, Pose2D>& experience_truth, double max_distance_m);
 
 // Dead reckoning of per-frame velocities (frame order), from (0, 0, 0): turn, then drive.
 std::vector<FramePose> DeadReckon(std::vector<FrameVelocity> odometry);

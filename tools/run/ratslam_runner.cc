@@ -126,7 +126,7 @@ pose_cells::Action RatSlamRunner::PoseCellsAndMap(double vtrans, double vrot, do
                : 0.0;
   }
   const pose_cells::Action action =
-      pose_cells_.ProcessFrame(vtrans, vrot, dt_s, view.template_id, view.is_new, view.relative_angle_rad);
+      pose_cells_.ProcessFrame(vtrans, vrot, dt_s, {view.template_id, view.is_new, view.relative_angle_rad});
   has_last_frame_ = true;
   last_frame_stamp_ns_ = stamp_ns;
   last_pose_cells_micros_ = MicrosSince(start);

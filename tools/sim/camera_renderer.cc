@@ -134,7 +134,7 @@ cv::Mat CameraRenderer::Render(const Pose2D& pose, uint64_t frame_index) {
 }
 
 void CameraRenderer::Render(const Pose2D& pose, uint64_t frame_index, cv::Mat& out) {
-  if (!pose.IsFinite()) throw std::invalid_argument("CameraRenderer::Render: non-finite pose");
+  if (!IsFinite(pose)) throw std::invalid_argument("CameraRenderer::Render: non-finite pose");
   const int w = camera_.width, h = camera_.height;
   out.create(h, w, CV_8UC3);
 

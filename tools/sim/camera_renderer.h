@@ -23,7 +23,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "tools/sim/pose2d.h"
+#include "common/math/pose2d.h"
 #include "tools/sim/sim_config.h"
 #include "tools/sim/wall_texture.h"
 #include "tools/sim/world_map.h"

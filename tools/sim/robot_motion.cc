@@ -18,7 +18,7 @@ const MotionConfig& Validated(const MotionConfig& config) {
 
 RobotMotion::RobotMotion(const WorldMap& world, const MotionConfig& config, const Pose2D& start)
     : world_(world), config_(Validated(config)), pose_(start) {
-  if (!start.IsFinite()) throw std::invalid_argument("RobotMotion: start pose must be finite");
+  if (!IsFinite(start)) throw std::invalid_argument("RobotMotion: start pose must be finite");
   if (!world_.IsDiscFree(Eigen::Vector2d(start.x, start.y), config_.robot_radius_m)) {
     throw std::invalid_argument("RobotMotion: the robot overlaps a wall at the start pose");
   }

@@ -6,7 +6,7 @@
 
 #include <cstdint>
 
-#include "tools/sim/pose2d.h"
+#include "common/math/pose2d.h"
 #include "tools/sim/proto/sim_state.pb.h"
 #include "tools/sim/sim_config.h"
 #include "tools/sim/world_map.h"

@@ -9,7 +9,7 @@
 #include <cstdint>
 
 #include "tools/sim/camera_renderer.h"
-#include "tools/sim/pose2d.h"
+#include "common/math/pose2d.h"
 #include "tools/sim/proto/sim_state.pb.h"
 #include "tools/sim/robot_motion.h"
 #include "tools/sim/sim_config.h"

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "tools/sim/pose2d.h"
+#include "common/math/pose2d.h"
 
 namespace rslam::sim {
 

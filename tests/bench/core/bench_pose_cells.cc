@@ -36,7 +36,7 @@ void RunPoseCellFrames(benchmark::State& state, int dim_xy, double cell_size_m) 
       is_new = true;
     }
     ++frame;
-    return net.ProcessFrame(vtrans, vrot, 0.1, tid, is_new, 0.0);
+    return net.ProcessFrame(vtrans, vrot, 0.1, {tid, is_new, 0.0});
   };
   for (int i = 0; i < 500; ++i) one_frame();
   for (auto _ : state) benchmark::DoNotOptimize(one_frame());
@@ -62,7 +62,7 @@ void RunPoseCellRevisits(benchmark::State& state, int dim_xy, double cell_size_m
     bool is_new = frame < kLap;
     if (!is_new && frame % 50 == 49) tid = static_cast<uint32_t>((j + kLap / 2) % kLap);
     ++frame;
-    return net.ProcessFrame(8.0, vrot, 0.1, tid, is_new, 0.0);
+    return net.ProcessFrame(8.0, vrot, 0.1, {tid, is_new, 0.0});
   };
   for (int i = 0; i < 2 * kLap; ++i) one_frame();
   for (auto _ : state) benchmark::DoNotOptimize(one_frame());

@@ -94,7 +94,7 @@ class OccupancyServiceTest : public ::testing::Test {
     return process;
   }
 
-  msg::Image Frame(uint64_t seq, const sim::Pose2D& pose) {
+  msg::Image Frame(uint64_t seq, const Pose2D& pose) {
     const cv::Mat bgr = renderer_.Render(pose, seq);
     msg::Image image;
     image.header = {"robot1", seq, static_cast<int64_t>(seq) * 100'000'000};
@@ -124,7 +124,7 @@ class OccupancyServiceTest : public ::testing::Test {
 
   // Publishes the frame (pose first or image first) and waits for its profile.
   std::optional<msg::ObstacleProfile> SendFrame(uint64_t seq, bool pose_first = true) {
-    const msg::Image image = Frame(seq, sim::Pose2D{0, 0, 0});
+    const msg::Image image = Frame(seq, Pose2D{0, 0, 0});
     const msg::ExperiencePose pose = Pose(seq, 0, 0, 0);
     if (pose_first) {
       pose_pub_->Publish(pose);
@@ -264,7 +264,7 @@ TEST_F(OccupancyServiceTest, WhileTheMapKeepsCorrectingItRebuildsAtMostEveryNFra
 
 TEST_F(OccupancyServiceTest, AcceptsMonoImages) {
   auto service = Start();
-  const cv::Mat bgr = renderer_.Render(sim::Pose2D{}, 1);
+  const cv::Mat bgr = renderer_.Render(Pose2D{}, 1);
   cv::Mat grey;
   cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
   msg::Image image;
@@ -292,7 +292,7 @@ TEST_F(OccupancyServiceTest, MalformedInputIsCountedAndTheServiceKeepsWorking) {
   auto service = Start();
   ASSERT_TRUE(SendFrame(1)) << service->Output();
 
-  msg::Image good = Frame(2, sim::Pose2D{});
+  msg::Image good = Frame(2, Pose2D{});
   msg::Image short_data = good;
   short_data.data.resize(good.data.size() / 2);
   msg::Image unknown_encoding = good;
@@ -301,7 +301,7 @@ TEST_F(OccupancyServiceTest, MalformedInputIsCountedAndTheServiceKeepsWorking) {
   huge.width = 100000;
   huge.height = 100000;
   huge.step = 300000;
-  msg::Image wrong_size = Frame(2, sim::Pose2D{});
+  msg::Image wrong_size = Frame(2, Pose2D{});
   wrong_size.width = 160;
   wrong_size.step = 480;
   msg::ExperiencePose nan_pose = Pose(2, std::numeric_limits<double>::quiet_NaN(), 0, 0);

@@ -215,7 +215,7 @@ TEST_F(OdometryServiceTest, FloorOdometryReportsTheWallsDirectionAndBoundary) {
   occupancy::ObstacleProfilePipeline boundary(occupancy::SimulatorMatchedPipelineConfig());
   // Poses whose frames give (in this process) a direction within 0.02 rad of the truth, and poses
   // with nothing within 2 m, from a walk over the map.
-  std::vector<std::pair<sim::Pose2D, bool>> poses;
+  std::vector<std::pair<Pose2D, bool>> poses;
   int with_wall = 0, without = 0;
   uint64_t render_seq = 0;
   for (double x = -6.0; x <= 6.0 && (with_wall < 3 || without < 2); x += 0.5)

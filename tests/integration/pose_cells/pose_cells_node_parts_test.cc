@@ -107,7 +107,7 @@ TEST(ScriptedLoopTest, CreatesExperiencesThenLinksBackToTheFirstWhenItsViewRetur
   std::vector<Action> actions;
   for (const auto& f : testing::ScriptedLoop(2 * testing::kLapFrames)) {
     actions.push_back(network.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                                           f.view.template_id, f.view.is_new, f.view.relative_angle_rad));
+                                           {f.view.template_id, f.view.is_new, f.view.relative_angle_rad}));
   }
   int creates_in_lap_1 = 0;
   for (int i = 0; i < testing::kLapFrames; ++i) {
@@ -134,11 +134,11 @@ TEST(AdoptExperienceMapTest, NextCreatedIdFollowsTheMapsExperiences) {
   for (int i = 0; i < testing::kLapFrames; ++i) {
     const auto& f = frames[i];
     const Action a = ahead.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                                        f.view.template_id, f.view.is_new, 0.0);
+                                        {f.view.template_id, f.view.is_new, 0.0});
     if (a.kind == Action::Kind::kCreate) map.push_back({a.template_id, {a.pc_x, a.pc_y, a.pc_th}});
     if (i < 30) {
-      behind.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s, f.view.template_id,
-                          f.view.is_new, 0.0);
+      behind.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
+                          {f.view.template_id, f.view.is_new, 0.0});
     }
   }
   ASSERT_GT(map.size(), behind.experience_count());
@@ -155,7 +155,7 @@ TEST(AdoptExperienceMapTest, NextCreatedIdFollowsTheMapsExperiences) {
     auto f = testing::ScriptedLoopFrame(i);
     f.view.template_id = testing::kTemplatesPerLap + static_cast<uint32_t>(i);  // new places
     next = behind.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                               behind.template_count(), true, 0.0);
+                               {behind.template_count(), true, 0.0});
   }
   EXPECT_EQ(next.kind, Action::Kind::kCreate);
   EXPECT_EQ(next.experience_id, map.size());
@@ -173,12 +173,12 @@ TEST(AdoptExperienceMapTest, RefusesOutOfRangeCellsAndUnknownIdsUnchanged) {
 
 TEST(SkipTemplatesTest, SkippedTemplateIsPlacedAtItsFirstSightingAndInjectsNothingBefore) {
   PoseCellNetwork network(PoseCellConfig{});
-  network.ProcessFrame(0, 0, 0.1, 0, true, 0.0);
+  network.ProcessFrame(0, 0, 0.1, {0, true, 0.0});
   network.SkipTemplates(5);
   EXPECT_EQ(network.template_count(), 5u);
   EXPECT_THROW(network.SkipTemplates(2), std::invalid_argument);
   // Template 3 seen for the first time: associated, like a new one; a valid frame.
-  EXPECT_NO_THROW(network.ProcessFrame(1.0, 0, 0.1, 3, false, 0.0));
+  EXPECT_NO_THROW(network.ProcessFrame(1.0, 0, 0.1, {3, false, 0.0}));
   const proto::State saved = network.SaveState();
   PoseCellNetwork restored(PoseCellConfig{});
   restored.LoadState(saved);

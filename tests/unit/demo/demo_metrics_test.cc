@@ -23,9 +23,9 @@ msg::Experience At(uint32_t id, double x, double y) {
 
 TEST(DemoMetricsTest, FitMapToWorldRecoversATurnedAndShiftedMap) {
   // World positions of four experiences; the map holds them turned by 0.4 rad and shifted.
-  const std::map<uint32_t, sim::Pose2D> truth = {
+  const std::map<uint32_t, Pose2D> truth = {
       {0, {1.0, 2.0, 0.0}}, {1, {3.0, 2.5, 0.0}}, {2, {2.0, -1.0, 0.0}}, {5, {-1.0, 0.5, 0.0}}};
-  const sim::Pose2D map_to_world{0.7, -0.3, 0.4};
+  const Pose2D map_to_world{0.7, -0.3, 0.4};
   std::vector<msg::Experience> map;
   const double c = std::cos(-map_to_world.theta), s = std::sin(-map_to_world.theta);
   for (const auto& [id, w] : truth) {
@@ -40,7 +40,7 @@ TEST(DemoMetricsTest, FitMapToWorldRecoversATurnedAndShiftedMap) {
   EXPECT_NEAR(fit->theta, map_to_world.theta, 1e-9);
   for (const auto& e : map) {
     if (!truth.count(e.id)) continue;
-    const sim::Pose2D w = MapToWorld(*fit, e.x_m, e.y_m);
+    const Pose2D w = MapToWorld(*fit, e.x_m, e.y_m);
     EXPECT_NEAR(w.x, truth.at(e.id).x, 1e-9);
     EXPECT_NEAR(w.y, truth.at(e.id).y, 1e-9);
   }
@@ -48,7 +48,7 @@ TEST(DemoMetricsTest, FitMapToWorldRecoversATurnedAndShiftedMap) {
 
 TEST(DemoMetricsTest, FitMapToWorldIsTheLeastSquaresTurnOfANoisyMap) {
   // Symmetric errors around the true positions leave the fit at the identity.
-  const std::map<uint32_t, sim::Pose2D> truth = {{0, {0, 0, 0}}, {1, {2, 0, 0}}, {2, {2, 2, 0}}, {3, {0, 2, 0}}};
+  const std::map<uint32_t, Pose2D> truth = {{0, {0, 0, 0}}, {1, {2, 0, 0}}, {2, {2, 2, 0}}, {3, {0, 2, 0}}};
   const std::vector<msg::Experience> map = {At(0, 0.1, 0), At(1, 1.9, 0), At(2, 2.1, 2), At(3, -0.1, 2)};
   const auto fit = FitMapToWorld(map, truth);
   ASSERT_TRUE(fit.has_value());
@@ -58,7 +58,7 @@ TEST(DemoMetricsTest, FitMapToWorldIsTheLeastSquaresTurnOfANoisyMap) {
 }
 
 TEST(DemoMetricsTest, FitMapToWorldNeedsTwoExperiencesWithGroundTruth) {
-  const std::map<uint32_t, sim::Pose2D> truth = {{0, {1.0, 2.0, 0.0}}};
+  const std::map<uint32_t, Pose2D> truth = {{0, {1.0, 2.0, 0.0}}};
   const std::vector<msg::Experience> map = {At(0, 0, 0), At(1, 1, 0)};
   EXPECT_FALSE(FitMapToWorld(map, truth).has_value());
 }
@@ -67,12 +67,12 @@ TEST(DemoMetricsTest, MapOriginTurnsTheMapByItsInitialFacing) {
   // The robot starts at (1, 2) facing 0.3 rad in the world; the experience map has it facing
   // pi/2 (OpenRatSLAM's default). A point 1 m ahead of the start in the map, (0, 1), is 1 m ahead
   // in the world.
-  const sim::Pose2D start{1.0, 2.0, 0.3};
-  const sim::Pose2D ahead = MapToWorld(MapOrigin(start, std::numbers::pi / 2), 0.0, 1.0);
+  const Pose2D start{1.0, 2.0, 0.3};
+  const Pose2D ahead = MapToWorld(MapOrigin(start, std::numbers::pi / 2), 0.0, 1.0);
   EXPECT_NEAR(ahead.x, 1.0 + std::cos(0.3), 1e-12);
   EXPECT_NEAR(ahead.y, 2.0 + std::sin(0.3), 1e-12);
   // Facing 0 in the map: the map frame is the start pose's own.
-  const sim::Pose2D same = MapToWorld(MapOrigin(start, 0.0), 1.0, 0.0);
+  const Pose2D same = MapToWorld(MapOrigin(start, 0.0), 1.0, 0.0);
   EXPECT_NEAR(same.x, 1.0 + std::cos(0.3), 1e-12);
   EXPECT_NEAR(same.y, 2.0 + std::sin(0.3), 1e-12);
 }

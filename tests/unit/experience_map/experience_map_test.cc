@@ -114,7 +114,7 @@ TEST(ExperienceMap, CreatePlacesExperienceAtAccumulatedOdometryWithEq1Link) {
   EXPECT_NEAR(l.travel_time_s, 2.0, 1e-12);
   EXPECT_EQ(map.current_id(), 1u);
   map.Integrate(0.5, 0.0, 1.0);
-  EXPECT_NEAR(map.RobotPose().y_m, 2.5, 1e-12);
+  EXPECT_NEAR(map.RobotPose().y, 2.5, 1e-12);
 }
 
 TEST(ExperienceMap, RepeatedTransitionAveragesLinkByEq2) {
@@ -153,7 +153,7 @@ double HeadingAfterRecognising(double correction, double back_facing, double rel
   ExperienceAction back = LinkTo(Kind::kLink, 1, 0);
   back.relative_angle_rad = relative;
   map.Apply(back);
-  return map.RobotPose().th_rad;
+  return map.RobotPose().theta;
 }
 
 TEST(ExperienceMap, RecognitionTakesTheConfiguredShareOfTheHeadingDifference) {
@@ -187,7 +187,7 @@ TEST(ExperienceMap, ALinkToARecognisedPlaceAgreesWithTheHeadingTheRecognitionGiv
   ASSERT_EQ(link.from_id, 2u);
   ASSERT_EQ(link.to_id, 0u);
   EXPECT_NEAR(link.facing_rad, 0.0, 1e-12);  // OpenRatSLAM's sign: 0.6
-  EXPECT_NEAR(map.RobotPose().th_rad, 0.3, 1e-12);
+  EXPECT_NEAR(map.RobotPose().theta, 0.3, 1e-12);
 }
 
 // Experience 0 at the origin facing +y, experience 1 two metres east; the robot drives back 1.7
@@ -195,7 +195,7 @@ TEST(ExperienceMap, ALinkToARecognisedPlaceAgreesWithTheHeadingTheRecognitionGiv
 // `offset_left_m` to its left (the robot stands at x = -offset_left_m in truth). No map
 // correction. Returns the robot's pose after the recognition and the length of the link 0 -> 1,
 // averaged with the way back (000 eq. 2).
-std::pair<Pose2, double> RecogniseFromTheEast(double position_correction, double offset_left_m = 0.0) {
+std::pair<Pose2D, double> RecogniseFromTheEast(double position_correction, double offset_left_m = 0.0) {
   ExperienceMapConfig config = NoCorrection();
   config.exp_position_correction = position_correction;
   ExperienceMap map(config);
@@ -215,12 +215,12 @@ std::pair<Pose2, double> RecogniseFromTheEast(double position_correction, double
 }
 
 TEST(ExperienceMap, RecognitionTakesTheConfiguredShareOfThePositionDifference) {
-  const Pose2 on = RecogniseFromTheEast(1.0).first;  // OpenRatSLAM: on the experience
-  EXPECT_NEAR(on.x_m, 0.0, 1e-9);
-  EXPECT_NEAR(on.y_m, 0.0, 1e-9);
-  const Pose2 part = RecogniseFromTheEast(0.4).first;  // 0.4 of the way from x = 0.3 to 0
-  EXPECT_NEAR(part.x_m, 0.18, 1e-9);
-  EXPECT_NEAR(part.y_m, 0.0, 1e-9);
+  const Pose2D on = RecogniseFromTheEast(1.0).first;  // OpenRatSLAM: on the experience
+  EXPECT_NEAR(on.x, 0.0, 1e-9);
+  EXPECT_NEAR(on.y, 0.0, 1e-9);
+  const Pose2D part = RecogniseFromTheEast(0.4).first;  // 0.4 of the way from x = 0.3 to 0
+  EXPECT_NEAR(part.x, 0.18, 1e-9);
+  EXPECT_NEAR(part.y, 0.0, 1e-9);
   ExperienceMapConfig config;
   config.exp_position_correction = 0.0;
   EXPECT_THROW(config.Validate(), ConfigError);
@@ -230,16 +230,16 @@ TEST(ExperienceMap, RecognitionTakesTheConfiguredShareOfThePositionDifference) {
 // the robot there, not on the experience, and the way back it observes keeps the true distance.
 TEST(ExperienceMap, RecognitionWithAMeasuredOffsetPutsTheRobotWhereItStands) {
   const auto [agrees, agrees_link] = RecogniseFromTheEast(1.0, -0.3);  // at x = 0.3, as dead reckoned
-  EXPECT_NEAR(agrees.x_m, 0.3, 1e-9);
-  EXPECT_NEAR(agrees.y_m, 0.0, 1e-9);
-  EXPECT_NEAR(agrees.th_rad, kPi, 1e-9);
+  EXPECT_NEAR(agrees.x, 0.3, 1e-9);
+  EXPECT_NEAR(agrees.y, 0.0, 1e-9);
+  EXPECT_NEAR(agrees.theta, kPi, 1e-9);
   EXPECT_NEAR(agrees_link, 2.0, 1e-9);
   EXPECT_NEAR(RecogniseFromTheEast(1.0).second, 1.85, 1e-9);  // on the experience: back 0.3 m short
-  const Pose2 measured = RecogniseFromTheEast(1.0, -0.1).first;  // at x = 0.1, not 0.3
-  EXPECT_NEAR(measured.x_m, 0.1, 1e-9);
-  const Pose2 part = RecogniseFromTheEast(0.4, -0.1).first;  // 0.4 of the way from 0.3 to 0.1
-  EXPECT_NEAR(part.x_m, 0.22, 1e-9);
-  EXPECT_NEAR(part.y_m, 0.0, 1e-9);
+  const Pose2D measured = RecogniseFromTheEast(1.0, -0.1).first;  // at x = 0.1, not 0.3
+  EXPECT_NEAR(measured.x, 0.1, 1e-9);
+  const Pose2D part = RecogniseFromTheEast(0.4, -0.1).first;  // 0.4 of the way from 0.3 to 0.1
+  EXPECT_NEAR(part.x, 0.22, 1e-9);
+  EXPECT_NEAR(part.y, 0.0, 1e-9);
 }
 
 TEST(ExperienceMap, HeadingCorrectionOutsideZeroToOneIsRefused) {
@@ -575,7 +575,7 @@ TEST(ExperienceMap, HeadingHeldToTheWallsLosesTheOdometrysDrift) {
       map.Apply(frame % 10 == 9 ? Create(frame / 10 + 1, frame / 10) : ExperienceAction{});
     }
     if (!held) {
-      EXPECT_NEAR(map.RobotPose().th_rad, 1.0, 1e-9);
+      EXPECT_NEAR(map.RobotPose().theta, 1.0, 1e-9);
       EXPECT_FALSE(map.manhattan_axes().has_value());
       continue;
     }
@@ -583,7 +583,7 @@ TEST(ExperienceMap, HeadingHeldToTheWallsLosesTheOdometrysDrift) {
     // where a frame's drift (2 mrad) is the gain's share (0.2) of the offset: 6 + 10 - 2 mrad.
     ASSERT_TRUE(map.manhattan_axes().has_value());
     EXPECT_NEAR(*map.manhattan_axes(), -0.2 + 0.006, 1e-9);
-    EXPECT_NEAR(map.RobotPose().th_rad, 0.014, 1e-6);
+    EXPECT_NEAR(map.RobotPose().theta, 0.014, 1e-6);
     // So are the experiences it laid and the links between them.
     EXPECT_NEAR(map.experiences().back().th_rad, 0.014, 1e-6);
     EXPECT_NEAR(map.links().back().facing_rad, 0.0, 1e-3);
@@ -596,11 +596,11 @@ TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
   ASSERT_TRUE(map.manhattan_axes().has_value());
   EXPECT_NEAR(*map.manhattan_axes(), 0.0, 1e-12);
   map.HoldHeading(0.1);  // a wall 0.1 rad off: the heading turns a fifth of it back
-  EXPECT_NEAR(map.RobotPose().th_rad, -0.02, 1e-12);
+  EXPECT_NEAR(map.RobotPose().theta, -0.02, 1e-12);
   map.HoldHeading(0.6);  // 0.6 rad off: some other wall
-  EXPECT_NEAR(map.RobotPose().th_rad, -0.02, 1e-12);
+  EXPECT_NEAR(map.RobotPose().theta, -0.02, 1e-12);
   EXPECT_THROW(map.HoldHeading(std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
-  EXPECT_NEAR(map.RobotPose().th_rad, -0.02, 1e-12);
+  EXPECT_NEAR(map.RobotPose().theta, -0.02, 1e-12);
 
   // Reference directions that disagree (a corner of odd angle, a table) fix nothing.
   ExperienceMap scattered(HeldToWalls());

@@ -46,7 +46,7 @@ TEST(PoseCellsToExperienceMap, TwoLapsOfASquareKeepIdsInStepAndCloseTheLoop) {
     const double v = turn ? 0.0 : 2.0, w = turn ? quarter : 0.0;
     const bool first_lap = frame < kFramesPerLap;
     const pose_cells::Action a =
-        cells.ProcessFrame(v, w, 1.0, static_cast<uint32_t>(j), first_lap, 0.0);
+        cells.ProcessFrame(v, w, 1.0, {static_cast<uint32_t>(j), first_lap, 0.0});
     map->Integrate(v, w, 1.0);
     if (a.kind != pose_cells::Action::Kind::kNone) {
       ASSERT_EQ(a.sequence, expected_sequence++);

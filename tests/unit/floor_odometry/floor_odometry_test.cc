@@ -224,7 +224,7 @@ class RenderedFloorOdometryTest : public ::testing::Test {
     return c;
   }
 
-  PlanarMotion Step(const sim::Pose2D& pose, const PlanarMotion& prior) {
+  PlanarMotion Step(const Pose2D& pose, const PlanarMotion& prior) {
     const cv::Mat image = renderer_.Render(pose, frame_++);
     const occupancy::RadialObstacleProfile profile = boundary_.ProfileFromImage(image);
     std::vector<Eigen::Vector2d> points;
@@ -244,7 +244,7 @@ TEST_F(RenderedFloorOdometryTest, StraightMovesTowardsWallsMeasureTheDistance) {
   // 2.5 cm per frame with no speed prior, so the distance is the registration's alone.
   for (const auto& [x, heading] : {std::pair{4.96, 0.0}, std::pair{4.36, M_PI}}) {
     odometry_.Reset();
-    sim::Pose2D pose{x, -2.70, heading};
+    Pose2D pose{x, -2.70, heading};
     Step(pose, {});
     double travelled = 0.0;
     int measured = 0;

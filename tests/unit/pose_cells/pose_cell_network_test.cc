@@ -238,13 +238,13 @@ TEST(PoseCellNetwork, RepeatedViewsElsewhereWinOverThePacket) {
   PoseCellNetwork net(SmallConfig());
   // Learn views 0 and 1 at the start pose, then drive 6 cells away learning new views.
   uint32_t next = 0;
-  net.ProcessFrame(0.0, 0.0, 1.0, next++, true, 0.0);
-  net.ProcessFrame(0.0, 0.0, 1.0, next++, true, 0.0);
-  for (int i = 0; i < 6; ++i) net.ProcessFrame(1.0, 0.0, 1.0, next++, true, 0.0);
-  for (int i = 0; i < 6; ++i) net.ProcessFrame(0.0, 0.0, 1.0, next++, true, 0.0);
+  net.ProcessFrame(0.0, 0.0, 1.0, {next++, true, 0.0});
+  net.ProcessFrame(0.0, 0.0, 1.0, {next++, true, 0.0});
+  for (int i = 0; i < 6; ++i) net.ProcessFrame(1.0, 0.0, 1.0, {next++, true, 0.0});
+  for (int i = 0; i < 6; ++i) net.ProcessFrame(0.0, 0.0, 1.0, {next++, true, 0.0});
   ASSERT_NEAR(CircularDistance(net.BestPose().x, 4.0, 21), 0.0, 0.5);
   // Now the robot sees the start views again (alternating, so neither decays).
-  for (int i = 0; i < 60; ++i) net.ProcessFrame(0.0, 0.0, 1.0, i % 2, false, 0.0);
+  for (int i = 0; i < 60; ++i) net.ProcessFrame(0.0, 0.0, 1.0, {static_cast<uint32_t>(i % 2), false, 0.0});
   EXPECT_NEAR(CircularDistance(net.BestPose().x, 10.0, 21), 0.0, 0.5);
   EXPECT_EQ(CountPeaks(net), 1);
 }
@@ -253,7 +253,7 @@ TEST(PoseCellNetwork, RepeatedViewsElsewhereWinOverThePacket) {
 // boundary every frame of the square sees, back the one the frames coming back see (nullptr:
 // not measured).
 struct SquareDrive {
-  std::vector<Action> actions;
+  std::vector<Action> actions{};
   const FloorBoundary* outbound = nullptr;
   const FloorBoundary* back = nullptr;
   void Run(PoseCellNetwork& net) {
@@ -272,7 +272,7 @@ struct SquareDrive {
     Frame(net, 2.0, 0.0, 1, false, back);  // and the view after it, along the known path
   }
   void Frame(PoseCellNetwork& net, double v, double w, uint32_t tid, bool is_new, const FloorBoundary* boundary) {
-    const Action a = net.ProcessFrame(v, w, 1.0, tid, is_new, 0.0, boundary);
+    const Action a = net.ProcessFrame(v, w, 1.0, {tid, is_new, 0.0}, boundary);
     if (a.kind != Action::Kind::kNone) actions.push_back(a);
   }
 };
@@ -405,18 +405,18 @@ TEST(PoseCellNetwork, ViewOffsetSaysWhereThePlaceWasRecognisedFromTheBestViewAnd
     uint32_t next = 0;
     std::vector<double> place;  // true x of the first pass's experiences (= their templates)
     for (int k = 0; k < 10; ++k) {
-      ASSERT_EQ(net.ProcessFrame(0.4, 0.0, 1.0, next++, true, 0.0).kind, Action::Kind::kCreate);
+      ASSERT_EQ(net.ProcessFrame(0.4, 0.0, 1.0, {next++, true, 0.0}).kind, Action::Kind::kCreate);
       place.push_back(0.4 * (k + 1));
     }
     // Round a 4 x 2 m loop to the start with new views; the 4 m side back reads 4.6 m.
     for (const double step : {0.4, 0.46, 0.4}) {
-      net.ProcessFrame(0.0, kPi / 2, 1.0, next++, true, 0.0);
-      for (int i = 0; i < (step == 0.4 ? 5 : 10); ++i) net.ProcessFrame(step, 0.0, 1.0, next++, true, 0.0);
+      net.ProcessFrame(0.0, kPi / 2, 1.0, {next++, true, 0.0});
+      for (int i = 0; i < (step == 0.4 ? 5 : 10); ++i) net.ProcessFrame(step, 0.0, 1.0, {next++, true, 0.0});
     }
-    net.ProcessFrame(0.0, kPi / 2, 1.0, next++, true, 0.0);
+    net.ProcessFrame(0.0, kPi / 2, 1.0, {next++, true, 0.0});
     int recognised = 0, short_of_it = 0;
     auto second = [&](double x, double v, uint32_t tid, double difference) {
-      const Action a = net.ProcessFrame(v, 0.0, 1.0, tid, false, 0.0, nullptr, difference);
+      const Action a = net.ProcessFrame(v, 0.0, 1.0, {tid, false, 0.0, difference});
       if (a.kind != Action::Kind::kLink && a.kind != Action::Kind::kSet) return;
       ASSERT_LT(a.experience_id, place.size());
       const double truth = x - place[a.experience_id];
@@ -476,8 +476,8 @@ TEST(PoseCellNetwork, SavedAndLoadedNetworkKeepsTheBoundaries) {
   ASSERT_EQ(drive.actions[16].refused_link_to, 0u);
   // Both decide alike on what comes next: the corner seen from a metre back, then as it was.
   for (const FloorBoundary* view : std::vector<const FloorBoundary*>{&elsewhere, &there}) {
-    const Action x = a.ProcessFrame(0.0, 0.0, 1.0, 0, false, 0.0, view);
-    const Action y = b.ProcessFrame(0.0, 0.0, 1.0, 0, false, 0.0, view);
+    const Action x = a.ProcessFrame(0.0, 0.0, 1.0, {0, false, 0.0}, view);
+    const Action y = b.ProcessFrame(0.0, 0.0, 1.0, {0, false, 0.0}, view);
     EXPECT_EQ(x.kind, y.kind);
     EXPECT_EQ(x.experience_id, y.experience_id);
     EXPECT_EQ(x.refused_link_to, y.refused_link_to);
@@ -511,8 +511,8 @@ TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
     uint32_t tid;
     bool is_new;
     frame_input(i, tid, is_new);
-    a.ProcessFrame(0.6 + 0.1 * std::sin(i), 0.2 * std::cos(0.3 * i), 0.1 * (1 + i % 3), tid, is_new, 0.05 * (i % 4),
-                   nullptr, 0.01 * (i % 5));
+    a.ProcessFrame(0.6 + 0.1 * std::sin(i), 0.2 * std::cos(0.3 * i), 0.1 * (1 + i % 3),
+                   {tid, is_new, 0.05 * (i % 4), 0.01 * (i % 5)});
   }
   PoseCellNetwork b(cfg);
   b.LoadState(a.SaveState());
@@ -523,8 +523,8 @@ TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
     bool is_new;
     frame_input(i, tid, is_new);
     const double v = 0.6 + 0.1 * std::sin(i), w = 0.2 * std::cos(0.3 * i), dt = 0.1 * (1 + i % 3);
-    const Action x = a.ProcessFrame(v, w, dt, tid, is_new, 0.05 * (i % 4), nullptr, 0.01 * (i % 5));
-    const Action y = b.ProcessFrame(v, w, dt, tid, is_new, 0.05 * (i % 4), nullptr, 0.01 * (i % 5));
+    const Action x = a.ProcessFrame(v, w, dt, {tid, is_new, 0.05 * (i % 4), 0.01 * (i % 5)});
+    const Action y = b.ProcessFrame(v, w, dt, {tid, is_new, 0.05 * (i % 4), 0.01 * (i % 5)});
     ASSERT_EQ(x.kind, y.kind) << i;
     ASSERT_EQ(x.offset_x_m, y.offset_x_m) << i;
     ASSERT_EQ(x.offset_y_m, y.offset_y_m) << i;
@@ -540,25 +540,25 @@ TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
 
 TEST(PoseCellNetwork, RejectsNonFiniteInputAndTemplateIdJumps) {
   PoseCellNetwork net(SmallConfig());
-  net.ProcessFrame(0.1, 0.0, 0.1, 0, true, 0.0);
+  net.ProcessFrame(0.1, 0.0, 0.1, {0, true, 0.0});
   const std::string before = net.SaveState().SerializeAsString();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
-  EXPECT_THROW(net.ProcessFrame(nan, 0.0, 0.1, 1, true, 0.0), std::invalid_argument);
-  EXPECT_THROW(net.ProcessFrame(0.1, inf, 0.1, 1, true, 0.0), std::invalid_argument);
-  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, -0.1, 1, true, 0.0), std::invalid_argument);
-  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, nan, 1, true, 0.0), std::invalid_argument);
-  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, nan), std::invalid_argument);
-  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 5, true, 0.0), std::invalid_argument);
-  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, 0.0, nullptr, nan), std::invalid_argument);
-  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, 0.0, nullptr, -0.1), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(nan, 0.0, 0.1, {1, true, 0.0}), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, inf, 0.1, {1, true, 0.0}), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, -0.1, {1, true, 0.0}), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, nan, {1, true, 0.0}), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, {1, true, nan}), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, {5, true, 0.0}), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, {1, true, 0.0, nan}), std::invalid_argument);
+  EXPECT_THROW(net.ProcessFrame(0.1, 0.0, 0.1, {1, true, 0.0, -0.1}), std::invalid_argument);
   EXPECT_EQ(net.SaveState().SerializeAsString(), before);
-  EXPECT_NO_THROW(net.ProcessFrame(0.1, 0.0, 0.1, 1, true, 0.0));
+  EXPECT_NO_THROW(net.ProcessFrame(0.1, 0.0, 0.1, {1, true, 0.0}));
 }
 
 TEST(PoseCellNetwork, LoadRefusesStateOfOtherDimensionsOrInconsistentIds) {
   PoseCellNetwork a(SmallConfig());
-  a.ProcessFrame(0.1, 0.0, 0.1, 0, true, 0.0);
+  a.ProcessFrame(0.1, 0.0, 0.1, {0, true, 0.0});
   PoseCellConfig big = SmallConfig();
   big.pc_dim_xy = 30;
   PoseCellNetwork b(big);
