@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 #include <google/protobuf/wrappers.pb.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
+#include "common/math/pose2d_proto.h"
 #include "common/persistence/state_file.h"
 
 namespace rslam {
@@ -47,6 +49,28 @@ TEST_F(StateFileTest, CorruptForeignOrNewerFilesAreRefused) {
   std::filesystem::resize_file(path_, 20);
   EXPECT_THROW(ReadStateFile(path_, "test.kind", 2, out), StateFileError);
   EXPECT_THROW(ReadStateFile(path_ + ".missing", "test.kind", 2, out), StateFileError);
+}
+
+// A pose in every service's state file is fields 1, 2, 3 as doubles (x, y, theta), as the
+// explorer's, occupancy mapper's and pose cells' own messages were before they shared
+// rslam.proto.Pose2D: files saved then must still read the same.
+TEST(SavedPoseTest, KeepsTheWireFormatOfTheOlderStateFiles) {
+  std::string older;
+  for (const auto& [tag, v] : {std::pair{'\x09', 1.5}, {'\x11', -2.0}, {'\x19', 0.25}}) {
+    char le[8];
+    std::memcpy(le, &v, 8);  // fixed64, little-endian on every platform we build for
+    older.push_back(tag);
+    older.append(le, 8);
+  }
+  proto::Pose2D saved;
+  SavePose({1.5, -2.0, 0.25}, &saved);
+  EXPECT_EQ(saved.SerializeAsString(), older);
+  proto::Pose2D read;
+  ASSERT_TRUE(read.ParseFromString(older));
+  const Pose2D pose = LoadPose(read);
+  EXPECT_EQ(pose.x, 1.5);
+  EXPECT_EQ(pose.y, -2.0);
+  EXPECT_EQ(pose.theta, 0.25);
 }
 
 TEST(Crc32Test, MatchesTheStandardCheckValue) {

@@ -10,12 +10,13 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/child_process.h"
 #include "tests/unit/eval/eval_test_files.h"
 
 namespace rslam::eval {
 namespace {
 
-using testing::FreshTempDir;
+using rslam::testing::ScratchFolderForTest;
 using testing::WriteText;
 
 // Runs `rslam <args>` with only the eval command; returns what it printed.
@@ -29,7 +30,7 @@ std::string RunRslam(std::vector<std::string> args) {
 }
 
 TEST(EvalCommand, TrajectoryPrintsAteAsJson) {
-  const auto dir = FreshTempDir("cli");
+  const auto dir = ScratchFolderForTest();
   WriteText(dir / "truth.csv", "stamp_ns,x,y\n0,0,0\n1000,2,0\n2000,2,2\n3000,0,2\n");
   WriteText(dir / "estimate.csv", "stamp_ns,x,y\n0,0,0\n1000,1,0\n2000,1,1\n3000,0,1\n");
   const auto json = nlohmann::json::parse(RunRslam({"eval", "trajectory", "--estimate", (dir / "estimate.csv").string(),
@@ -45,7 +46,7 @@ TEST(EvalCommand, TrajectoryPrintsAteAsJson) {
 }
 
 TEST(EvalCommand, BadCsvFailsWithTheLineInTheMessage) {
-  const auto dir = FreshTempDir("cli");
+  const auto dir = ScratchFolderForTest();
   WriteText(dir / "truth.csv", "stamp_ns,x,y\n0,0,0\n1000,oops,0\n");
   try {
     RunRslam({"eval", "trajectory", "--estimate", (dir / "truth.csv").string(), "--ground-truth",
@@ -59,7 +60,7 @@ TEST(EvalCommand, BadCsvFailsWithTheLineInTheMessage) {
 }
 
 TEST(EvalCommand, VprScoresFrameAlignedFolders) {
-  const auto dir = FreshTempDir("cli");
+  const auto dir = ScratchFolderForTest();
   for (const char* season : {"summer", "winter"}) std::filesystem::create_directories(dir / season);
   cv::RNG random(7);
   for (int k = 0; k < 12; ++k) {
@@ -85,7 +86,7 @@ TEST(EvalCommand, VprScoresFrameAlignedFolders) {
 }
 
 TEST(EvalCommand, VprBadInputIsAClearError) {
-  const auto dir = FreshTempDir("cli");
+  const auto dir = ScratchFolderForTest();
   std::filesystem::create_directories(dir / "empty");
   try {
     RunRslam({"eval", "vpr", "--reference", (dir / "empty").string(), "--query", (dir / "empty").string()});

@@ -7,12 +7,13 @@
 #include <functional>
 #include <stdexcept>
 
+#include "tests/support/child_process.h"
 #include "tests/unit/eval/eval_test_files.h"
 
 namespace rslam::eval {
 namespace {
 
-using testing::FreshTempDir;
+using rslam::testing::ScratchFolderForTest;
 using testing::WriteText;
 
 void WriteImages(const std::filesystem::path& dir, int count, int value) {
@@ -32,7 +33,7 @@ std::string ErrorOf(const std::function<void()>& f) {
 }
 
 TEST(ImageFolder, LoadsGreyImagesSortedByName) {
-  const auto dir = FreshTempDir("images");
+  const auto dir = ScratchFolderForTest();
   WriteImages(dir, 3, 50);
   WriteText(dir / "notes.txt", "not an image");
   const ImageFolder folder = LoadGreyImageFolder(dir);
@@ -45,7 +46,7 @@ TEST(ImageFolder, LoadsGreyImagesSortedByName) {
 }
 
 TEST(ImageFolder, BadFoldersGiveClearErrors) {
-  const auto dir = FreshTempDir("bad");
+  const auto dir = ScratchFolderForTest();
   EXPECT_NE(ErrorOf([&] { LoadGreyImageFolder(dir); }).find("holds no images"), std::string::npos);
   EXPECT_NE(ErrorOf([&] { LoadGreyImageFolder(dir / "missing"); }).find("does not exist"), std::string::npos);
   WriteText(dir / "broken.png", "this is not a png");
@@ -54,7 +55,7 @@ TEST(ImageFolder, BadFoldersGiveClearErrors) {
 }
 
 TEST(ImageFolder, FrameAlignedSetsMustHoldTheSameFiles) {
-  const auto dir = FreshTempDir("aligned");
+  const auto dir = ScratchFolderForTest();
   std::filesystem::create_directories(dir / "summer");
   std::filesystem::create_directories(dir / "winter");
   WriteImages(dir / "summer", 3, 10);
