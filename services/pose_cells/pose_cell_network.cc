@@ -712,7 +712,7 @@ void PoseCellNetwork::ValidateFrame(double vtrans, double vrot, double dt, const
 
 void PoseCellNetwork::InjectView(uint32_t template_id, double relative_angle_rad, bool is_new) {
   ValidateFrame(0.0, 0.0, 0.0, {template_id, is_new, relative_angle_rad});
-  (void)is_new;  // a template is new exactly when its id is the next one; the flag is advisory
+  // is_new is advisory: a template is new exactly when its id is the next one.
   const double gamma_cells = relative_angle_rad / kTwoPi * dim_th_;
   const double active_decay = config_.vt_active_decay;
   if (template_id == views_.size()) {
@@ -775,7 +775,7 @@ bool PoseCellNetwork::Linked(uint32_t a, uint32_t b) const {
 void PoseCellNetwork::CreateExperience(const FloorBoundary* boundary) {
   const uint32_t id = static_cast<uint32_t>(experiences_.size());
   experiences_.push_back({best_.x, best_.y, best_.th, current_template_, frames_processed_, boundary != nullptr,
-                          boundary ? *boundary : FloorBoundary{}, true, odometry_});
+                          boundary ? *boundary : FloorBoundary{}, odometry_});
   views_[current_template_].experience_ids.push_back(id);
   links_of_.emplace_back();
   if (has_current_experience_) {
@@ -796,7 +796,7 @@ std::optional<BoundaryMatch> PoseCellNetwork::MatchBoundary(const ExperienceCell
 
 std::optional<Eigen::Vector2d> PoseCellNetwork::ViewOffset(uint32_t recognised) const {
   const ExperienceCell& e = experiences_[recognised];
-  if (!e.odometry_known) return std::nullopt;
+  if (!e.odometry) return std::nullopt;
   const RecentView* best = nullptr;
   const ExperienceCell* there = nullptr;  // where the robot stood at best
   const uint64_t max_gap = static_cast<uint64_t>(config_.exp_view_offset_max_gap_frames);
@@ -808,7 +808,7 @@ std::optional<Eigen::Vector2d> PoseCellNetwork::ViewOffset(uint32_t recognised) 
       const ExperienceCell& c = experiences_[id];
       const uint64_t gap = c.created_frame > e.created_frame ? c.created_frame - e.created_frame
                                                              : e.created_frame - c.created_frame;
-      if (c.odometry_known && gap < nearest_gap) {
+      if (c.odometry && gap < nearest_gap) {
         nearest_gap = gap;
         nearest = &c;
       }
@@ -818,7 +818,7 @@ std::optional<Eigen::Vector2d> PoseCellNetwork::ViewOffset(uint32_t recognised) 
     there = nearest;
   }
   if (!best) return std::nullopt;
-  const Pose2D offset = Compose(Between(e.odometry, there->odometry), Between(best->odometry, odometry_));
+  const Pose2D offset = Compose(Between(*e.odometry, *there->odometry), Between(best->odometry, odometry_));
   return Eigen::Vector2d(offset.x, offset.y);
 }
 
@@ -945,9 +945,7 @@ Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_r
 }
 
 void PoseCellNetwork::DeadReckon(double distance_m, double turn_rad) {
-  odometry_.x += distance_m * std::cos(odometry_.theta);
-  odometry_.y += distance_m * std::sin(odometry_.theta);
-  odometry_.theta = WrapAngle(odometry_.theta + turn_rad);
+  odometry_ = Compose(odometry_, {distance_m, 0.0, turn_rad});
 }
 
 void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& experiences,
@@ -993,7 +991,7 @@ void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& exper
         std::abs(known[id].pc_th - e.cell.th) < 1e-3) {
       experiences_.push_back(std::move(known[id]));
     } else {
-      experiences_.push_back({e.cell.x, e.cell.y, e.cell.th, e.template_id, frames_processed_, false, {}, false, {}});
+      experiences_.push_back({e.cell.x, e.cell.y, e.cell.th, e.template_id, frames_processed_, false, {}, std::nullopt});
     }
     views_[e.template_id].experience_ids.push_back(id);
   }
@@ -1103,7 +1101,7 @@ proto::State PoseCellNetwork::SaveState() const {
       pe->add_boundary_xy(p.x());
       pe->add_boundary_xy(p.y());
     }
-    if (e.odometry_known) SavePose(e.odometry, pe->mutable_odometry());
+    if (e.odometry) SavePose(*e.odometry, pe->mutable_odometry());
   }
   for (const RecentView& v : recent_views_) {
     auto* pv = s.add_recent_views();
@@ -1218,7 +1216,8 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
     FloorBoundary boundary;
     for (int i = 0; i + 1 < e.boundary_xy_size(); i += 2) boundary.emplace_back(e.boundary_xy(i), e.boundary_xy(i + 1));
     experiences_.push_back({e.pc_x(), e.pc_y(), e.pc_th(), e.template_id(), e.created_frame(), e.boundary_known(),
-                            std::move(boundary), e.has_odometry(), LoadPose(e.odometry())});
+                            std::move(boundary),
+                            e.has_odometry() ? std::optional(LoadPose(e.odometry())) : std::nullopt});
   }
   recent_views_.clear();
   for (const auto& v : s.recent_views()) recent_views_.push_back({v.template_id(), v.difference(), LoadPose(v.odometry())});

@@ -175,8 +175,7 @@ class PoseCellNetwork {
     uint64_t created_frame = 0;   // frames_processed_ when made
     bool boundary_known = false;  // boundary measured (not adopted from the map)
     FloorBoundary boundary;
-    bool odometry_known = false;  // made by this network (not adopted from the map)
-    Pose2D odometry;              // odometry_ when made
+    std::optional<Pose2D> odometry;  // odometry_ when made; none when adopted from the map
   };
   struct RecentView {
     uint32_t template_id;

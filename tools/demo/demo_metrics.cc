@@ -16,18 +16,14 @@ Pose2D MapOrigin(const Pose2D& start, double initial_facing_rad) {
   return {start.x, start.y, WrapAngle(start.theta - initial_facing_rad)};
 }
 
-Pose2D MapToWorld(const Pose2D& origin, double x, double y) {
-  const double c = std::cos(origin.theta), s = std::sin(origin.theta);
-  return {origin.x + c * x - s * y, origin.y + s * x + c * y, origin.theta};
-}
+Pose2D MapToWorld(const Pose2D& origin, double x, double y) { return Compose(origin, {x, y, 0.0}); }
 
 namespace {
 
 // World point to the map frame.
 Eigen::Vector2d WorldToMap(const Pose2D& origin, const Eigen::Vector2d& p) {
-  const double c = std::cos(origin.theta), s = std::sin(origin.theta);
-  const double dx = p.x() - origin.x, dy = p.y() - origin.y;
-  return {c * dx + s * dy, -s * dx + c * dy};
+  const Pose2D m = Between(origin, {p.x(), p.y(), 0.0});
+  return {m.x, m.y};
 }
 
 // The grid value at a map-frame point, or -1 outside the grid.

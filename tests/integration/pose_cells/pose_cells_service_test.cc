@@ -183,7 +183,9 @@ TEST_F(PoseCellsServiceTest, BoundaryCheckRefusesTheLoopClosureWhenTheWallsDisag
     const pose_cells::Action plain = unchecked.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps,
                                                             f.velocity.dt_s, {f.view.template_id, f.view.is_new, 0.0});
     EXPECT_EQ(actions[i].kind, KindOf(want.kind)) << "frame " << i;
-    if (want.kind != pose_cells::Action::Kind::kNone) EXPECT_EQ(actions[i].experience_id, want.experience_id) << i;
+    if (want.kind != pose_cells::Action::Kind::kNone) {
+      EXPECT_EQ(actions[i].experience_id, want.experience_id) << i;
+    }
     refused += want.refused_link_to != pose_cells::kNoExperience;
     links += actions[i].kind == msg::ActionKind::ACTION_LINK;
     unchecked_links += plain.kind == pose_cells::Action::Kind::kLink;
