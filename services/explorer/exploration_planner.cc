@@ -107,8 +107,9 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
 
 void ExplorationPlanner::ReportBump(const Plan& plan, const Pose2D& at, bool backwards) {
   if (!IsFinite(at)) throw std::invalid_argument("bump pose is not finite");
-  const double r = config_.robot_radius_m, heading = at.theta + (backwards ? M_PI : 0.0);
-  ReportBlocked(plan, std::pair{at.x + r * std::cos(heading), at.y + r * std::sin(heading)});
+  const double r = config_.robot_radius_m;
+  const Pose2D front = Compose(at, {backwards ? -r : r, 0.0, 0.0});
+  ReportBlocked(plan, std::pair{front.x, front.y});
 }
 
 bool ExplorationPlanner::PassesBlockingObstacle(const Pose2D& from, double distance_m) const {
@@ -152,11 +153,11 @@ std::optional<Plan> ExplorationPlanner::StepOutOfRadius(const GridView& occupanc
   double best_clearance = inside + 0.25 * res;  // a step must gain at least this much
   for (const double offset : {0.0, M_PI / 6, -M_PI / 6, M_PI / 3, -M_PI / 3, M_PI / 2, -M_PI / 2}) {
     const Pose2D step{robot.x, robot.y, away + offset};
-    const double ex = robot.x + distance * std::cos(step.theta), ey = robot.y + distance * std::sin(step.theta);
-    const double c = clearance(ex, ey);
+    const Pose2D end = Compose(step, {distance, 0.0, 0.0});
+    const double c = clearance(end.x, end.y);
     if (c > best_clearance + 1e-9 && IsPathClear(occupancy, step, distance) && !PassesBlockingObstacle(step, distance)) {
       best_clearance = c;
-      best = Pose2D{ex, ey, step.theta};
+      best = end;
     }
   }
   if (!best) return std::nullopt;
@@ -460,8 +461,8 @@ std::optional<std::pair<double, double>> ExplorationPlanner::ObstacleOnPath(cons
                                                                            double distance_m) const {
   occupancy.Validate();
   if (!IsFinite(from) || !std::isfinite(distance_m)) throw std::invalid_argument("pose or distance not finite");
-  const double x0 = from.x, y0 = from.y;
-  const double x1 = x0 + distance_m * std::cos(from.theta), y1 = y0 + distance_m * std::sin(from.theta);
+  const Pose2D end = Compose(from, {distance_m, 0.0, 0.0});
+  const double x0 = from.x, y0 = from.y, x1 = end.x, y1 = end.y;
   const double r = config_.robot_radius_m, res = occupancy.resolution_m;
   const int cx_min = static_cast<int>(std::floor((std::min(x0, x1) - r - occupancy.origin_x_m) / res));
   const int cx_max = static_cast<int>(std::floor((std::max(x0, x1) + r - occupancy.origin_x_m) / res));

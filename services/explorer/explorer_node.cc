@@ -54,8 +54,7 @@ msg::MotionKind ToMessageKind(MotionCommand::Kind kind) {
 Pose2D Apply(const Pose2D& p, const MotionCommand& c) {
   switch (c.kind) {
     case MotionCommand::Kind::kRotate: return {p.x, p.y, WrapAngle(p.theta + c.angle_rad)};
-    case MotionCommand::Kind::kMove:
-      return {p.x + c.distance_m * std::cos(p.theta), p.y + c.distance_m * std::sin(p.theta), p.theta};
+    case MotionCommand::Kind::kMove: return Compose(p, {c.distance_m, 0.0, 0.0});
     default: return p;
   }
 }

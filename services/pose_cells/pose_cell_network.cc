@@ -774,8 +774,8 @@ bool PoseCellNetwork::Linked(uint32_t a, uint32_t b) const {
 
 void PoseCellNetwork::CreateExperience(const FloorBoundary* boundary) {
   const uint32_t id = static_cast<uint32_t>(experiences_.size());
-  experiences_.push_back({best_.x, best_.y, best_.th, current_template_, frames_processed_, boundary != nullptr,
-                          boundary ? *boundary : FloorBoundary{}, odometry_});
+  experiences_.push_back({best_.x, best_.y, best_.th, current_template_, frames_processed_,
+                          boundary ? std::optional(*boundary) : std::nullopt, odometry_});
   views_[current_template_].experience_ids.push_back(id);
   links_of_.emplace_back();
   if (has_current_experience_) {
@@ -789,9 +789,9 @@ void PoseCellNetwork::CreateExperience(const FloorBoundary* boundary) {
 std::optional<BoundaryMatch> PoseCellNetwork::MatchBoundary(const ExperienceCell& e,
                                                             const FloorBoundary* boundary) const {
   const size_t min_points = static_cast<size_t>(config_.exp_boundary_min_points);
-  if (!boundary || !e.boundary_known || boundary->size() < min_points || e.boundary.size() < min_points)
+  if (!boundary || !e.boundary || boundary->size() < min_points || e.boundary->size() < min_points)
     return std::nullopt;
-  return RegisterBoundaries(e.boundary, *boundary);
+  return RegisterBoundaries(*e.boundary, *boundary);
 }
 
 std::optional<Eigen::Vector2d> PoseCellNetwork::ViewOffset(uint32_t recognised) const {
@@ -865,7 +865,7 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
       // boundary, or one that does not align, refuses it. A boundary known only to one side
       // (adopted from the map, a frame without odometry) does not.
       const bool checked = recognised && !linked && config_.exp_boundary_check && boundary &&
-                           experiences_[matched].boundary_known &&
+                           experiences_[matched].boundary &&
                            frames_processed_ - experiences_[matched].created_frame >=
                                static_cast<uint64_t>(config_.exp_boundary_min_age_frames);
       std::optional<BoundaryMatch> match;
@@ -991,7 +991,7 @@ void PoseCellNetwork::AdoptExperienceMap(const std::vector<MapExperience>& exper
         std::abs(known[id].pc_th - e.cell.th) < 1e-3) {
       experiences_.push_back(std::move(known[id]));
     } else {
-      experiences_.push_back({e.cell.x, e.cell.y, e.cell.th, e.template_id, frames_processed_, false, {}, std::nullopt});
+      experiences_.push_back({e.cell.x, e.cell.y, e.cell.th, e.template_id, frames_processed_, std::nullopt, std::nullopt});
     }
     views_[e.template_id].experience_ids.push_back(id);
   }
@@ -1096,8 +1096,8 @@ proto::State PoseCellNetwork::SaveState() const {
     pe->set_pc_th(e.pc_th);
     pe->set_template_id(e.template_id);
     pe->set_created_frame(e.created_frame);
-    pe->set_boundary_known(e.boundary_known);
-    for (const Eigen::Vector2f& p : e.boundary) {
+    pe->set_boundary_known(e.boundary.has_value());
+    for (const Eigen::Vector2f& p : e.boundary.value_or(FloorBoundary{})) {
       pe->add_boundary_xy(p.x());
       pe->add_boundary_xy(p.y());
     }
@@ -1213,10 +1213,12 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   }
   experiences_.clear();
   for (const auto& e : s.experiences()) {
-    FloorBoundary boundary;
-    for (int i = 0; i + 1 < e.boundary_xy_size(); i += 2) boundary.emplace_back(e.boundary_xy(i), e.boundary_xy(i + 1));
-    experiences_.push_back({e.pc_x(), e.pc_y(), e.pc_th(), e.template_id(), e.created_frame(), e.boundary_known(),
-                            std::move(boundary),
+    std::optional<FloorBoundary> boundary;
+    if (e.boundary_known()) {
+      boundary.emplace();
+      for (int i = 0; i + 1 < e.boundary_xy_size(); i += 2) boundary->emplace_back(e.boundary_xy(i), e.boundary_xy(i + 1));
+    }
+    experiences_.push_back({e.pc_x(), e.pc_y(), e.pc_th(), e.template_id(), e.created_frame(), std::move(boundary),
                             e.has_odometry() ? std::optional(LoadPose(e.odometry())) : std::nullopt});
   }
   recent_views_.clear();

@@ -43,6 +43,7 @@
 #include "services/pose_cells/pose_cell_action.h"
 #include "services/pose_cells/pose_cell_config.h"
 #include "services/pose_cells/proto/pose_cells_state.pb.h"
+#include "services/templates/view_match.h"
 
 namespace rslam::pose_cells {
 
@@ -62,13 +63,7 @@ struct MapExperience {
   PoseCellPosition cell;  // pose-cell position the experience was created at
 };
 
-// The template learner's match for one frame, as the network uses it.
-struct ViewMatch {
-  uint32_t template_id = 0;         // dense from 0
-  bool is_new = false;              // the learner just learnt it
-  double relative_angle_rad = 0.0;  // the view's orientation offset gamma (001 eq. 4)
-  double difference = 0.0;          // the match's difference (0 = identical); exp_view_offset compares it
-};
+using templates::ViewMatch;
 
 class PoseCellNetwork {
  public:
@@ -173,8 +168,7 @@ class PoseCellNetwork {
     double pc_x, pc_y, pc_th;
     uint32_t template_id;
     uint64_t created_frame = 0;   // frames_processed_ when made
-    bool boundary_known = false;  // boundary measured (not adopted from the map)
-    FloorBoundary boundary;
+    std::optional<FloorBoundary> boundary;  // none when not measured (adopted from the map)
     std::optional<Pose2D> odometry;  // odometry_ when made; none when adopted from the map
   };
   struct RecentView {

@@ -56,16 +56,10 @@
 #include "services/templates/proto/template_library.pb.h"
 #include "services/templates/template_config.h"
 #include "services/templates/view_encoding.h"
+#include "services/templates/view_match.h"
 #include "services/templates/window_sad.h"
 
 namespace rslam::templates {
-
-struct ViewMatch {
-  uint32_t template_id;        // the matched template, or the new one
-  bool is_new;                 // true when the view was learnt as a new template
-  double relative_angle_rad;   // 0 for a new template
-  double difference;           // to the matched template (or the best one, when new)
-};
 
 class TemplateLibrary {
  public:

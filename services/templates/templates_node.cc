@@ -159,12 +159,13 @@ class TemplatesNode::Impl {
       }
       ++learnt_since_save_;
     }
+    const ViewMatch sent = AsPublished(match);
     msg::ViewTemplate out;
     out.header = image.header;
-    out.template_id = match.template_id;
-    out.is_new = match.is_new;
-    out.relative_angle_rad = std::isfinite(match.relative_angle_rad) ? match.relative_angle_rad : 0.0;
-    out.difference = std::isfinite(match.difference) ? match.difference : kNoTemplateDifference;
+    out.template_id = sent.template_id;
+    out.is_new = sent.is_new;
+    out.relative_angle_rad = sent.relative_angle_rad;
+    out.difference = sent.difference;
     out.template_count = static_cast<uint32_t>(library_.size());
     try {
       publisher_->Publish(out);

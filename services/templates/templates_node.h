@@ -24,9 +24,6 @@
 
 namespace rslam::templates {
 
-// `difference` reported when there was no template to compare with.
-inline constexpr double kNoTemplateDifference = 1e9;
-
 class TemplatesNode {
  public:
   using Config = TemplatesNodeConfig;

@@ -4,7 +4,6 @@
 #include "services/experience_map/experience_action_message.h"
 #include "services/pose_cells/pose_cell_action_message.h"
 #include "tools/run/grey_rows.h"
-#include "tools/run/service_messages.h"
 
 #include <opencv2/imgproc.hpp>
 
@@ -102,8 +101,7 @@ FrameRecord RatSlamRunner::ProcessFrame(const cv::Mat& image, int64_t stamp_ns) 
 
   // Templates service.
   start = Clock::now();
-  record.view = templates_.MatchOrLearn(grey);
-  record.view.relative_angle_rad = PublishedRelativeAngle(record.view.relative_angle_rad);
+  record.view = templates::AsPublished(templates_.MatchOrLearn(grey));
   record.micros.templates = MicrosSince(start);
 
   record.action = PoseCellsAndMap(record.velocity.vtrans, record.velocity.vrot, record.dt_s, stamp_ns, record.view);
@@ -125,8 +123,7 @@ pose_cells::Action RatSlamRunner::PoseCellsAndMap(double vtrans, double vrot, do
                ? std::min(limits.max_dt_s, static_cast<double>(stamp_ns - last_frame_stamp_ns_) * 1e-9)
                : 0.0;
   }
-  const pose_cells::Action action =
-      pose_cells_.ProcessFrame(vtrans, vrot, dt_s, {view.template_id, view.is_new, view.relative_angle_rad});
+  const pose_cells::Action action = pose_cells_.ProcessFrame(vtrans, vrot, dt_s, view);
   has_last_frame_ = true;
   last_frame_stamp_ns_ = stamp_ns;
   last_pose_cells_micros_ = MicrosSince(start);

@@ -11,12 +11,13 @@
 //     (Update still sees the frame, with dt = 1 / camera_hz, to keep its profile).
 //     velocity = VisualOdometry::Update(grey, dt)
 //   templates service (TemplatesNode::OnImage):
-//     view = TemplateLibrary::MatchOrLearn(grey); a non-finite relative angle is sent as 0
+//     view = AsPublished(TemplateLibrary::MatchOrLearn(grey)) (view_match.h: non-finite numbers
+//     are sent as finite ones)
 //   pose-cell service (PoseCellsNode::ProcessFrame, velocity and view joined by frame):
 //     odometry outside pose_cells.max_dt_s / max_vtrans_mps / max_vrot_radps is refused: the
 //     frame then integrates no motion over min(max_dt_s, stamp difference);
-//     action = PoseCellNetwork::ProcessFrame(vtrans, vrot, dt, template_id, is_new, angle),
-//     sent as msg::PoseCellAction (service_messages.h) with the odometry it integrated
+//     action = PoseCellNetwork::ProcessFrame(vtrans, vrot, dt, view), sent as
+//     msg::PoseCellAction (pose_cell_action_message.h) with the odometry it integrated
 //   experience-map service (ExperienceMapNode::Apply), every frame's action message:
 //     refused whole when its dt is beyond experience_map.max_dt_s; else
 //     ExperienceMap::Integrate(vtrans, vrot, dt), then Apply(action) (an action with ids that

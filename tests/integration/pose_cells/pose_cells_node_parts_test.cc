@@ -106,8 +106,7 @@ TEST(ScriptedLoopTest, CreatesExperiencesThenLinksBackToTheFirstWhenItsViewRetur
   PoseCellNetwork network(PoseCellConfig{});
   std::vector<Action> actions;
   for (const auto& f : testing::ScriptedLoop(2 * testing::kLapFrames)) {
-    actions.push_back(network.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                                           {f.view.template_id, f.view.is_new, f.view.relative_angle_rad}));
+    actions.push_back(network.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s, MatchOf(f)));
   }
   int creates_in_lap_1 = 0;
   for (int i = 0; i < testing::kLapFrames; ++i) {
@@ -133,12 +132,10 @@ TEST(AdoptExperienceMapTest, NextCreatedIdFollowsTheMapsExperiences) {
   std::vector<MapExperience> map;
   for (int i = 0; i < testing::kLapFrames; ++i) {
     const auto& f = frames[i];
-    const Action a = ahead.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                                        {f.view.template_id, f.view.is_new, 0.0});
+    const Action a = ahead.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s, MatchOf(f));
     if (a.kind == Action::Kind::kCreate) map.push_back({a.template_id, {a.pc_x, a.pc_y, a.pc_th}});
     if (i < 30) {
-      behind.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                          {f.view.template_id, f.view.is_new, 0.0});
+      behind.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s, MatchOf(f));
     }
   }
   ASSERT_GT(map.size(), behind.experience_count());

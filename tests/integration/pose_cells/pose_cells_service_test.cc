@@ -124,7 +124,7 @@ TEST_F(PoseCellsServiceTest, OneActionPerFrameInOrderCreatesThenLinksWhenTheFirs
   for (int i = 0; i < frames; ++i) {
     const ScriptedFrame& f = script[i];
     const pose_cells::Action want = reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                                                           {f.view.template_id, f.view.is_new, 0.0});
+                                                           MatchOf(f));
     const msg::PoseCellAction& got = actions[i];
     EXPECT_EQ(got.action_seq, static_cast<uint64_t>(i));
     EXPECT_EQ(got.header, f.velocity.header);
@@ -178,10 +178,10 @@ TEST_F(PoseCellsServiceTest, BoundaryCheckRefusesTheLoopClosureWhenTheWallsDisag
     pose_cells::FloorBoundary boundary;
     for (const msg::FloorPoint& p : f.velocity.boundary) boundary.emplace_back(p.x_m, p.y_m);
     const pose_cells::Action want = reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps,
-                                                           f.velocity.dt_s, {f.view.template_id, f.view.is_new, 0.0},
+                                                           f.velocity.dt_s, MatchOf(f),
                                                            &boundary);
     const pose_cells::Action plain = unchecked.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps,
-                                                            f.velocity.dt_s, {f.view.template_id, f.view.is_new, 0.0});
+                                                            f.velocity.dt_s, MatchOf(f));
     EXPECT_EQ(actions[i].kind, KindOf(want.kind)) << "frame " << i;
     if (want.kind != pose_cells::Action::Kind::kNone) {
       EXPECT_EQ(actions[i].experience_id, want.experience_id) << i;
@@ -212,8 +212,7 @@ TEST_F(PoseCellsServiceTest, ViewOffsetRidesOnTheRecognitionsAsTheLibraryMeasure
   for (int i = 0; i < frames; ++i) {
     const ScriptedFrame& f = script[i];
     const pose_cells::Action want =
-        reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                               {f.view.template_id, f.view.is_new, 0.0, f.view.difference});
+        reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s, MatchOf(f));
     ASSERT_EQ(actions[i].kind, KindOf(want.kind)) << "frame " << i;
     EXPECT_EQ(actions[i].offset_x_m, want.offset_x_m) << "frame " << i;
     EXPECT_EQ(actions[i].offset_y_m, want.offset_y_m) << "frame " << i;
@@ -275,8 +274,7 @@ TEST_F(PoseCellsServiceTest, SigtermSavesStateAndRestartContinuesTheActionSequen
   pose_cells::PoseCellNetwork reference(pose_cells::PoseCellConfig{});
   for (int i = 0; i < 40; ++i) {
     const ScriptedFrame& f = script[i];
-    const auto want = reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                                             {f.view.template_id, f.view.is_new, 0.0});
+    const auto want = reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s, MatchOf(f));
     if (i < 20) continue;
     EXPECT_EQ(actions[i - 20].action_seq, static_cast<uint64_t>(i));
     EXPECT_EQ(actions[i - 20].kind, KindOf(want.kind)) << "frame " << i;

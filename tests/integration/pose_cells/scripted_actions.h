@@ -41,7 +41,7 @@ inline std::vector<msg::PoseCellAction> ScriptedActions(const std::vector<Script
   std::vector<msg::PoseCellAction> out;
   for (const ScriptedFrame& f : frames) {
     const pose_cells::Action a = network.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps, f.velocity.dt_s,
-                                                      {f.view.template_id, f.view.is_new, f.view.relative_angle_rad});
+                                                      MatchOf(f));
     msg::PoseCellAction m;
     m.header = f.velocity.header;
     m.action_seq = out.size();

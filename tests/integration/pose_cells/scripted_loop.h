@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rslam/msg/all_messages.h"
+#include "services/templates/view_match.h"
 
 namespace rslam::testing {
 
@@ -18,6 +19,11 @@ struct ScriptedFrame {
   msg::Velocity velocity;
   msg::ViewTemplate view;
 };
+
+// The frame's view as the pose-cell service hands it to the network.
+inline templates::ViewMatch MatchOf(const ScriptedFrame& f) {
+  return {f.view.template_id, f.view.is_new, f.view.relative_angle_rad, f.view.difference};
+}
 
 inline constexpr int kLapFrames = 100;
 inline constexpr int kSideFrames = 25;

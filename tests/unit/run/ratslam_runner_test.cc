@@ -13,7 +13,6 @@
 #include "synthetic_loop.h"
 #include "services/experience_map/experience_action_message.h"
 #include "services/pose_cells/pose_cell_action_message.h"
-#include "tools/run/service_messages.h"
 
 namespace rslam::run {
 namespace {
@@ -243,8 +242,16 @@ TEST(ServiceMessages, ActionsTravelAsTheServicesSendThem) {
   EXPECT_EQ(applied.sequence, 41u) << "the message counter, as the experience-map service uses";
   EXPECT_EQ(applied.pc_x, static_cast<double>(static_cast<float>(action.pc_x))) << "float on the wire";
   EXPECT_NE(applied.pc_x, action.pc_x);
-  EXPECT_EQ(PublishedRelativeAngle(std::numeric_limits<double>::infinity()), 0.0);
-  EXPECT_EQ(PublishedRelativeAngle(-0.5), -0.5);
+  // The view: what the templates service sends, and the runner hands the pose cells.
+  const double inf = std::numeric_limits<double>::infinity();
+  const templates::ViewMatch first = templates::AsPublished({0, true, inf, inf});
+  EXPECT_EQ(first.relative_angle_rad, 0.0);
+  EXPECT_EQ(first.difference, templates::kNoTemplateDifference);
+  const templates::ViewMatch seen = templates::AsPublished({7, false, -0.5, 0.25});
+  EXPECT_EQ(seen.template_id, 7u);
+  EXPECT_FALSE(seen.is_new);
+  EXPECT_EQ(seen.relative_angle_rad, -0.5);
+  EXPECT_EQ(seen.difference, 0.25);
 }
 
 TEST(RatSlamConfig, UnknownSectionAndKeyAreNamed) {

@@ -212,7 +212,9 @@ TEST(HistogramModeTest, SkippingHistogramsKeepsTheSmallestDivergenceAndTheCandid
         EXPECT_TRUE(std::find(within.begin(), within.end(), std::make_pair(m.difference, m.template_id)) !=
                     within.end())
             << "query " << q << ": template " << m.template_id << " is not among the lowest " << max_candidates;
-        if (max_candidates == 1) EXPECT_EQ(m.template_id, within.front().second);
+        if (max_candidates == 1) {
+          EXPECT_EQ(m.template_id, within.front().second);
+        }
       }
     }
     EXPECT_GT(matched, 0);
