@@ -1097,9 +1097,11 @@ proto::State PoseCellNetwork::SaveState() const {
     pe->set_template_id(e.template_id);
     pe->set_created_frame(e.created_frame);
     pe->set_boundary_known(e.boundary.has_value());
-    for (const Eigen::Vector2f& p : e.boundary.value_or(FloorBoundary{})) {
-      pe->add_boundary_xy(p.x());
-      pe->add_boundary_xy(p.y());
+    if (e.boundary) {
+      for (const Eigen::Vector2f& p : *e.boundary) {
+        pe->add_boundary_xy(p.x());
+        pe->add_boundary_xy(p.y());
+      }
     }
     if (e.odometry) SavePose(*e.odometry, pe->mutable_odometry());
   }
