@@ -18,6 +18,7 @@
 #include "services/pose_cells/pose_cell_network.h"
 #include "services/pose_cells/proto/pose_cells_node_state.pb.h"
 #include "services/pose_cells/velocity_view_joiner.h"
+#include "services/templates/view_match_message.h"
 
 namespace rslam::pose_cells {
 
@@ -189,10 +190,7 @@ class PoseCellsNode::Processor {
     }
     Action action;
     try {
-      action = view ? network_.ProcessFrame(vtrans, vrot, dt,
-                                            {view->template_id, view->is_new, view->relative_angle_rad,
-                                             view->difference},
-                                            seen)
+      action = view ? network_.ProcessFrame(vtrans, vrot, dt, templates::FromViewMessage(*view), seen)
                     : network_.ProcessFrameWithoutView(vtrans, vrot, dt, seen);
     } catch (const std::invalid_argument& e) {
       context_.Reject("frame", e.what());

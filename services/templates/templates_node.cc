@@ -4,7 +4,6 @@
 
 #include <chrono>
 #include <cstdlib>
-#include <cmath>
 #include <filesystem>
 #include <mutex>
 #include <optional>
@@ -14,6 +13,7 @@
 #include "services/camera/image_message.h"
 #include "services/templates/template_journal.h"
 #include "services/templates/template_library.h"
+#include "services/templates/view_match_message.h"
 
 namespace rslam::templates {
 namespace {
@@ -159,14 +159,7 @@ class TemplatesNode::Impl {
       }
       ++learnt_since_save_;
     }
-    const ViewMatch sent = AsPublished(match);
-    msg::ViewTemplate out;
-    out.header = image.header;
-    out.template_id = sent.template_id;
-    out.is_new = sent.is_new;
-    out.relative_angle_rad = sent.relative_angle_rad;
-    out.difference = sent.difference;
-    out.template_count = static_cast<uint32_t>(library_.size());
+    const msg::ViewTemplate out = ToViewMessage(image.header, match, static_cast<uint32_t>(library_.size()));
     try {
       publisher_->Publish(out);
     } catch (const bus::BusError& e) {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "rslam/msg/all_messages.h"
-#include "services/templates/view_match.h"
+#include "services/templates/view_match_message.h"
 
 namespace rslam::testing {
 
@@ -21,9 +21,7 @@ struct ScriptedFrame {
 };
 
 // The frame's view as the pose-cell service hands it to the network.
-inline templates::ViewMatch MatchOf(const ScriptedFrame& f) {
-  return {f.view.template_id, f.view.is_new, f.view.relative_angle_rad, f.view.difference};
-}
+inline templates::ViewMatch MatchOf(const ScriptedFrame& f) { return templates::FromViewMessage(f.view); }
 
 inline constexpr int kLapFrames = 100;
 inline constexpr int kSideFrames = 25;
