@@ -21,6 +21,14 @@ namespace rslam::odometry {
 
 namespace {
 
+// The shift two halves share (rotation_from_halves, visual_odometry_config.h): none when they
+// move apart or one stands still, else the smaller.
+template <class T>
+T SharedShift(T left, T right) {
+  if ((left > 0) != (right > 0) || left == 0 || right == 0) return T{0};
+  return std::abs(left) < std::abs(right) ? left : right;
+}
+
 // prefix[i] = sum of p[n] for n < i, in double: the sum over any overlap in O(1), to well under
 // float precision.
 void PrefixSums(std::span<const float> p, std::vector<double>& prefix) {
@@ -300,7 +308,7 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   if (config_.rotation_from_halves) {
     const size_t half = rotation_width / 2;
     const auto left = rotation_shift(0, half), right = rotation_shift(rotation_width - half, half);
-    rotation = {static_cast<int>(std::lround(0.5 * (left.first + right.first))), 0.5 * (left.second + right.second)};
+    rotation = {SharedShift(left.first, right.first), SharedShift(left.second, right.second)};
   } else {
     rotation = rotation_shift(0, rotation_width);
   }

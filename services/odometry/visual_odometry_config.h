@@ -38,14 +38,15 @@ struct VisualOdometryConfig {
   // absolute difference is V-shaped at its minimum). An integer shift rounds a steady turn the
   // same way every frame: 24.45 px per frame read as 24 is a 1.8% shortfall on every turn.
   bool subpixel_rotation = false;
-  // Match the rotation profile's left and right halves apart; the rotation is the mean of their
-  // shifts. Driving towards a wall makes the image grow: the left half moves left, the right
-  // half right, and one match over the whole width finds a turn that is not there (the more
-  // textured half wins), up to 0.04 rad a frame right in front of a wall. A turn moves both
-  // halves the same way, so the mean keeps it (1.4% larger than the whole crop reads it in the
-  // demo's frames, probably because the columns a shift leaves out are the image's edge for one
-  // half and its centre for the other, and perspective moves the edge more). Off: the whole
-  // crop (OpenRatSLAM).
+  // Match the rotation profile's left and right halves apart; the rotation is the shift both
+  // share: none when they move apart or one stands still, else the smaller. A turn moves every
+  // column alike, while driving adds flow outwards in each half that grows with nearness:
+  // driving at a wall the image grows (one match over the whole width finds a turn that is not
+  // there, the more textured half winning, up to 0.04 rad a frame right in front of a wall), and
+  // driving past a wall close on one side streams that half alone (their mean read up to 0.07
+  // rad a frame, often alternating in sign, on 1% of the demo's straight frames, each also
+  // zeroing the frame's speed as a turn on the spot). Turning while driving forward, the smaller
+  // shift under-reads the turn by the nearer half's flow. Off: the whole crop (OpenRatSLAM).
   bool rotation_from_halves = false;
 
   template <class V>
@@ -73,7 +74,7 @@ struct VisualOdometryConfig {
     v("subpixel_rotation", subpixel_rotation,
       "refine the rotation shift below a pixel (OpenRatSLAM: whole pixels)");
     v("rotation_from_halves", rotation_from_halves,
-      "rotation = mean shift of the rotation crop's two halves, matched apart (the image growing ahead cancels)");
+      "rotation = the shift the rotation crop's two halves, matched apart, share (flow only one half shows is not a turn)");
   }
 
   void Validate() const {
