@@ -182,31 +182,27 @@ TEST(VisualOdometryTest, RotationFromHalvesKeepsATurnAndIgnoresFlowOnlyOneHalfSh
   two.Update(scene, kDt);
   EXPECT_LT(one.Update(nearer, kDt).vrot * kDt / rad_per_px, -4.0);
   EXPECT_NEAR(two.Update(nearer, kDt).vrot * kDt / rad_per_px, 0.0, 0.05);
+  // A frame of two 320-px views side by side.
+  const auto side_by_side = [](const cv::Mat& left, const cv::Mat& right) {
+    cv::Mat frame;
+    cv::hconcat(left, right, frame);
+    return frame;
+  };
   // Driving past a wall close on the left: its texture streams 14 px left while the far right
   // half holds still. The halves' mean would read a 7-px turn; they share none.
   const cv::Mat near_wall = Texture(680, 480, 7);
-  const cv::Mat far_side = Texture(320, 480, 8);
-  const auto past_wall = [&](int offset) {
-    cv::Mat frame(480, 640, CV_8UC1);
-    View(near_wall, offset, 320).copyTo(frame(cv::Rect(0, 0, 320, 480)));
-    far_side.copyTo(frame(cv::Rect(320, 0, 320, 480)));
-    return frame;
-  };
+  const cv::Mat far_wall = Texture(360, 480, 8);
   VisualOdometry driving(halves);
-  driving.Update(past_wall(20), kDt);
-  EXPECT_NEAR(driving.Update(past_wall(34), kDt).vrot * kDt / rad_per_px, 0.0, 0.05);
-  // Turning while the near wall streams faster: both halves move the same way, the turn is the
-  // smaller shift (the far half's).
-  cv::Mat turned(480, 640, CV_8UC1);
-  View(near_wall, 20 - 12, 320).copyTo(turned(cv::Rect(0, 0, 320, 480)));
-  const cv::Mat far_wide = Texture(360, 480, 8);
-  View(far_wide, 20, 320).copyTo(turned(cv::Rect(320, 0, 320, 480)));
-  cv::Mat before(480, 640, CV_8UC1);
-  View(near_wall, 20, 320).copyTo(before(cv::Rect(0, 0, 320, 480)));
-  View(far_wide, 25, 320).copyTo(before(cv::Rect(320, 0, 320, 480)));
+  driving.Update(side_by_side(View(near_wall, 20, 320), View(far_wall, 20, 320)), kDt);
+  EXPECT_NEAR(driving.Update(side_by_side(View(near_wall, 34, 320), View(far_wall, 20, 320)), kDt).vrot * kDt /
+                  rad_per_px,
+              0.0, 0.05);
+  // Turning while the near wall streams faster: both halves move the same way (12 and 5 px), the
+  // turn is the smaller shift.
   VisualOdometry arc(halves);
-  arc.Update(before, kDt);
-  EXPECT_NEAR(arc.Update(turned, kDt).vrot * kDt / rad_per_px, 5.0, 0.2);
+  arc.Update(side_by_side(View(near_wall, 20, 320), View(far_wall, 25, 320)), kDt);
+  EXPECT_NEAR(arc.Update(side_by_side(View(near_wall, 8, 320), View(far_wall, 20, 320)), kDt).vrot * kDt / rad_per_px,
+              5.0, 0.2);
   // Each half must be wider than min_overlap_px.
   halves.vrot_image_x_min = 300;
   halves.vrot_image_x_max = 350;
