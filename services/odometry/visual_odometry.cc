@@ -23,9 +23,8 @@ namespace {
 
 // The shift two halves share (rotation_from_halves, visual_odometry_config.h): none when they
 // move apart or one stands still, else the smaller.
-template <class T>
-T SharedShift(T left, T right) {
-  if ((left > 0) != (right > 0) || left == 0 || right == 0) return T{0};
+double SharedShift(double left, double right) {
+  if ((left > 0) != (right > 0) || left == 0 || right == 0) return 0.0;
   return std::abs(left) < std::abs(right) ? left : right;
 }
 
@@ -308,7 +307,8 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   if (config_.rotation_from_halves) {
     const size_t half = rotation_width / 2;
     const auto left = rotation_shift(0, half), right = rotation_shift(rotation_width - half, half);
-    rotation = {SharedShift(left.first, right.first), SharedShift(left.second, right.second)};
+    const double shared = SharedShift(left.second, right.second);
+    rotation = {static_cast<int>(std::lround(shared)), shared};
   } else {
     rotation = rotation_shift(0, rotation_width);
   }
