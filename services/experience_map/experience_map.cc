@@ -38,6 +38,7 @@ void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s)
   const double dist = vtrans_mps * dt_s;
   // OpenRatSLAM order: turn, then move along the new facing.
   accum_facing_ = WrapAngle(accum_facing_ + vrot_radps * dt_s);
+  turned_since_hold_rad_ += std::abs(vrot_radps * dt_s);
   accum_x_ += dist * std::cos(accum_facing_);
   accum_y_ += dist * std::sin(accum_facing_);
   accum_time_ += dt_s;
@@ -63,8 +64,12 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     return;
   }
   const double offset = std::remainder(direction - *manhattan_axes_, kPi / 2.0);
-  if (std::abs(offset) > config_.exp_manhattan_max_offset_rad) return;
+  const double gate = std::min(config_.exp_manhattan_max_offset_rad,
+                               config_.exp_manhattan_min_offset_rad +
+                                   config_.exp_manhattan_offset_per_rad_turned * turned_since_hold_rad_);
+  if (std::abs(offset) > gate) return;
   accum_facing_ = WrapAngle(accum_facing_ - config_.exp_manhattan_gain * offset);
+  turned_since_hold_rad_ = 0.0;
 }
 
 ExperienceMap::Observation ExperienceMap::ObservedFromCurrent(const ExperienceAction& a) const {
@@ -592,6 +597,7 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   manhattan_sum_cos_ = m.manhattan_sum_cos();
   manhattan_sum_sin_ = m.manhattan_sum_sin();
   manhattan_count_ = static_cast<int>(m.manhattan_count());
+  turned_since_hold_rad_ = std::numeric_limits<double>::max();  // the gate wide open
 }
 
 }  // namespace rslam::experience_map

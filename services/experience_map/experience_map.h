@@ -90,8 +90,10 @@ class ExperienceMap {
   // odometry's Velocity.wall_direction_rad; call it after Integrate for the frame that saw it).
   // The first exp_manhattan_reference_frames directions, taken in the map frame, fix the
   // building's axes if they agree (resultant length of 4 x the angles at least 0.9; else the
-  // next ones are tried); later ones within exp_manhattan_max_offset_rad of an axis turn the
-  // robot's heading exp_manhattan_gain of the way onto it. The first direction seen at an
+  // next ones are tried); later ones close enough to an axis (the gate of
+  // experience_map_config.h: exp_manhattan_min_offset_rad after a held wall, widening as the
+  // robot turns, at most exp_manhattan_max_offset_rad) turn the robot's heading
+  // exp_manhattan_gain of the way onto it. The first direction seen at an
   // experience is kept with it (Experience::wall_rad): with exp_graph_optimisation and
   // exp_manhattan_sigma_rad, the least-squares correction holds the experiences themselves to
   // the axes (pose_graph.h). Without exp_manhattan it does nothing.
@@ -192,6 +194,9 @@ class ExperienceMap {
   std::optional<double> manhattan_axes_;
   double manhattan_sum_cos_ = 0.0, manhattan_sum_sin_ = 0.0;
   int manhattan_count_ = 0;
+  // Turned (rad, summed absolute) since a wall direction last held the heading: widens the gate.
+  // A loaded map starts with the gate wide open (its heading's history is not saved).
+  double turned_since_hold_rad_ = 0.0;
   bool graph_pending_ = false;    // links changed since the last least-squares correction
   int frames_since_graph_ = 0;
 };

@@ -50,12 +50,19 @@ struct ExperienceMapConfig {
   // The robot's heading held to the building's walls (ExperienceMap::HoldHeading): most walls run
   // along two perpendicular directions (the Manhattan-world assumption). The first
   // exp_manhattan_reference_frames wall directions the odometry reports fix those axes in the
-  // map frame; after that a wall direction within exp_manhattan_max_offset_rad of an axis moves
-  // the robot's heading exp_manhattan_gain of the way onto it (one farther off is another wall).
-  // Only the floor odometry (odometry.floor_odometry) reports wall directions; without it the key
-  // changes nothing.
+  // map frame; after that a wall direction close enough to an axis moves the robot's heading
+  // exp_manhattan_gain of the way onto it (one farther off is another wall). Close enough: within
+  // exp_manhattan_min_offset_rad right after a wall was held, a gate that widens by
+  // exp_manhattan_offset_per_rad_turned for each radian the robot turns until the next one (the
+  // odometry's heading drifts as the robot turns), up to exp_manhattan_max_offset_rad. A fixed
+  // wide gate lets walls that are not on the axes turn the heading (a funnel's walls 0.29 rad
+  // off, a round table's chords); a fixed narrow one never pulls back a heading that drifted past
+  // it. Only the floor odometry (odometry.floor_odometry) reports wall directions; without it the
+  // keys change nothing.
   bool exp_manhattan = false;
   int exp_manhattan_reference_frames = 50;
+  double exp_manhattan_min_offset_rad = 0.25;
+  double exp_manhattan_offset_per_rad_turned = 0.0;
   double exp_manhattan_max_offset_rad = 0.25;
   double exp_manhattan_gain = 0.2;
   // With exp_graph_optimisation: each experience's first wall direction holds its facing to the
@@ -92,8 +99,12 @@ struct ExperienceMapConfig {
       "> 0: recognitions far off the rest of the map (chi^2 >> phi) weigh less (dynamic covariance scaling)");
     v("exp_manhattan", exp_manhattan, "hold the robot's heading to the walls' two perpendicular directions");
     v("exp_manhattan_reference_frames", exp_manhattan_reference_frames, "wall directions that fix the axes at the start");
+    v("exp_manhattan_min_offset_rad", exp_manhattan_min_offset_rad,
+      "right after a wall was held, a wall direction farther than this from an axis is another wall and is ignored (rad)");
+    v("exp_manhattan_offset_per_rad_turned", exp_manhattan_offset_per_rad_turned,
+      "... a gate that widens by this for each radian turned until a wall is held again");
     v("exp_manhattan_max_offset_rad", exp_manhattan_max_offset_rad,
-      "a wall direction farther than this from an axis is another wall and is ignored (rad)");
+      "... up to this; the least-squares correction's gate for the experiences' walls (rad)");
     v("exp_manhattan_gain", exp_manhattan_gain, "share of a wall direction's offset from its axis taken out per frame");
     v("exp_manhattan_sigma_rad", exp_manhattan_sigma_rad,
       "> 0, with exp_graph_optimisation: uncertainty of the experiences' wall directions in the least-squares correction (rad)");
@@ -121,6 +132,10 @@ struct ExperienceMapConfig {
     Require(std::isfinite(exp_manhattan_max_offset_rad) && exp_manhattan_max_offset_rad > 0 &&
                 exp_manhattan_max_offset_rad < std::numbers::pi / 4,
             "exp_manhattan_max_offset_rad", "must be in (0, pi/4)");
+    Require(std::isfinite(exp_manhattan_min_offset_rad) && exp_manhattan_min_offset_rad > 0,
+            "exp_manhattan_min_offset_rad", "must be positive");
+    Require(std::isfinite(exp_manhattan_offset_per_rad_turned) && exp_manhattan_offset_per_rad_turned >= 0,
+            "exp_manhattan_offset_per_rad_turned", "must be >= 0");
     Require(std::isfinite(exp_manhattan_gain) && exp_manhattan_gain > 0 && exp_manhattan_gain <= 1,
             "exp_manhattan_gain", "must be in (0, 1]");
     Require(std::isfinite(exp_manhattan_sigma_rad) && exp_manhattan_sigma_rad >= 0, "exp_manhattan_sigma_rad",

@@ -634,6 +634,58 @@ TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
   }
 }
 
+TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurns) {
+  ExperienceMapConfig config = HeldToWalls();
+  config.exp_manhattan_min_offset_rad = 0.1;
+  config.exp_manhattan_offset_per_rad_turned = 0.1;
+  config.exp_manhattan_max_offset_rad = 0.3;
+  ExperienceMap map(config);
+  for (int i = 0; i < 5; ++i) map.HoldHeading(0.0);  // fixes the axes at 0
+  ASSERT_TRUE(map.manhattan_axes().has_value());
+  // A wall direction that leaves the heading `offset` off the axes.
+  auto wall_at = [&](double offset) { return offset - map.RobotPose().theta; };
+  map.HoldHeading(wall_at(0.05));  // within 0.1: held, a fifth of it taken out
+  EXPECT_NEAR(map.RobotPose().theta, -0.01, 1e-12);
+  map.HoldHeading(wall_at(0.15));  // just held: the gate is 0.1
+  EXPECT_NEAR(map.RobotPose().theta, -0.01, 1e-12);
+
+  map.Integrate(0.0, 1.0, 1.0);  // a radian turned: the gate is 0.2
+  EXPECT_NEAR(map.RobotPose().theta, 0.99, 1e-12);
+  map.HoldHeading(wall_at(0.25));
+  EXPECT_NEAR(map.RobotPose().theta, 0.99, 1e-12);
+  map.HoldHeading(wall_at(0.15));
+  EXPECT_NEAR(map.RobotPose().theta, 0.99 - 0.03, 1e-12);
+  map.HoldHeading(wall_at(0.15));  // narrow again
+  EXPECT_NEAR(map.RobotPose().theta, 0.96, 1e-12);
+
+  map.Integrate(0.0, -1.0, 5.0);  // five radians either way: at most 0.3
+  map.HoldHeading(wall_at(0.35));
+  EXPECT_NEAR(map.RobotPose().theta, WrapAngle(0.96 - 5.0), 1e-12);
+  map.HoldHeading(wall_at(0.28));
+  EXPECT_NEAR(map.RobotPose().theta, WrapAngle(0.96 - 5.0 - 0.056), 1e-12);
+
+  // A loaded map does not know how far its heading drifted: the gate starts wide open.
+  ExperienceMap loaded(config);
+  loaded.Load(map.Save());
+  const double before = loaded.RobotPose().theta;
+  loaded.HoldHeading(0.28 - before);
+  EXPECT_NEAR(loaded.RobotPose().theta, before - 0.056, 1e-12);
+
+  for (auto [key, bad] : {std::pair<std::string, std::function<void(ExperienceMapConfig&)>>{
+                              "exp_manhattan_min_offset_rad", [](ExperienceMapConfig& c) { c.exp_manhattan_min_offset_rad = 0; }},
+                          {"exp_manhattan_offset_per_rad_turned",
+                           [](ExperienceMapConfig& c) { c.exp_manhattan_offset_per_rad_turned = -0.1; }}}) {
+    ExperienceMapConfig c = config;
+    bad(c);
+    try {
+      c.Validate();
+      ADD_FAILURE() << key << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(e.key(), key);
+    }
+  }
+}
+
 // The robot drives straight along walls that lie on the map's axes (seen at 0 rad in the robot
 // frame) while the odometry turns it 0.01 rad per experience: the least-squares correction, with
 // the experiences' walls in it, takes most of that turn back out of the map. The robot's own hold
