@@ -39,6 +39,7 @@ void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s)
   // OpenRatSLAM order: turn, then move along the new facing.
   accum_facing_ = WrapAngle(accum_facing_ + vrot_radps * dt_s);
   turned_since_hold_rad_ += std::abs(vrot_radps * dt_s);
+  driven_since_recognition_m_ += std::abs(dist);
   accum_x_ += dist * std::cos(accum_facing_);
   accum_y_ += dist * std::sin(accum_facing_);
   accum_time_ += dt_s;
@@ -138,6 +139,16 @@ void ExperienceMap::SetCurrent(uint32_t id, const ExperienceAction& a) {
   accum_facing_ = WrapAngle(th + a.relative_angle_rad);
 }
 
+bool ExperienceMap::RefusesRecognition(const ExperienceAction& a) const {
+  if (config_.exp_recognition_max_jump_m <= 0) return false;
+  const Experience& e = experiences_[a.experience_id];
+  const double c = std::cos(e.th_rad), s = std::sin(e.th_rad);
+  const Pose2D robot = RobotPose();
+  const double jump = std::hypot(e.x_m + c * a.offset_x_m - s * a.offset_y_m - robot.x,
+                                 e.y_m + s * a.offset_x_m + c * a.offset_y_m - robot.y);
+  return jump > config_.exp_recognition_max_jump_m + config_.exp_recognition_jump_per_m * driven_since_recognition_m_;
+}
+
 void ExperienceMap::ValidateIds(const ExperienceAction& a) const {
   if (!std::isfinite(a.relative_angle_rad)) Reject("relative angle is not finite");
   if (!std::isfinite(a.offset_x_m) || !std::isfinite(a.offset_y_m)) Reject("view offset is not finite");
@@ -152,7 +163,7 @@ void ExperienceMap::ValidateIds(const ExperienceAction& a) const {
       if (n == 0 && a.from_experience_id != kNoExperience) {
         Reject("first experience created from " + Id(a.from_experience_id) + " (expected none)");
       }
-      if (n > 0 && a.from_experience_id != current_) {
+      if (n > 0 && !IsCurrent(a.from_experience_id)) {
         Reject("create from " + Id(a.from_experience_id) + " but the current experience is " + Id(current_));
       }
       if (!std::isfinite(a.pc_x) || !std::isfinite(a.pc_y) || !std::isfinite(a.pc_th)) {
@@ -162,12 +173,12 @@ void ExperienceMap::ValidateIds(const ExperienceAction& a) const {
     case ExperienceAction::Kind::kLink:
     case ExperienceAction::Kind::kSet:
       if (a.experience_id >= n) Reject("unknown experience " + Id(a.experience_id));
-      if (!has_current_ || a.from_experience_id != current_) {
+      if (!has_current_ || !IsCurrent(a.from_experience_id)) {
         Reject("action from " + Id(a.from_experience_id) + " but the current experience is " +
                (has_current_ ? Id(current_) : std::string("none")));
       }
-      if (a.kind == ExperienceAction::Kind::kLink && a.experience_id == current_) {
-        Reject("link from experience " + Id(current_) + " to itself");
+      if (a.kind == ExperienceAction::Kind::kLink && a.experience_id == a.from_experience_id) {
+        Reject("link from experience " + Id(a.experience_id) + " to itself");
       }
       return;
   }
@@ -200,12 +211,23 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       links_to_.emplace_back();
       if (has_current_) AddLink(current_, e.id, ObservedFromCurrent({}));
       SetCurrent(e.id, {});
+      pose_cells_current_.reset();
       break;
     }
     case ExperienceAction::Kind::kLink:
     case ExperienceAction::Kind::kSet: {
       const uint32_t to = a.experience_id;
-      if (to == current_) break;
+      if (to == current_) {
+        pose_cells_current_.reset();
+        break;
+      }
+      if (RefusesRecognition(a)) {
+        pose_cells_current_ = to;
+        ++refused_recognitions_;
+        break;
+      }
+      pose_cells_current_.reset();
+      driven_since_recognition_m_ = 0.0;
       const Observation o = ObservedFromCurrent(a);
       const bool link_kind = a.kind == ExperienceAction::Kind::kLink;
       bool changed = false;
@@ -530,6 +552,9 @@ proto::ExperienceMap ExperienceMap::Save() const {
   m.set_manhattan_sum_cos(manhattan_sum_cos_);
   m.set_manhattan_sum_sin(manhattan_sum_sin_);
   m.set_manhattan_count(static_cast<uint32_t>(manhattan_count_));
+  m.set_has_pose_cells_current(pose_cells_current_.has_value());
+  m.set_pose_cells_current_id(pose_cells_current_.value_or(0));
+  m.set_driven_since_recognition_m(driven_since_recognition_m_);
   return m;
 }
 
@@ -561,6 +586,10 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   if (!finite({m.manhattan_axes_rad(), m.manhattan_sum_cos(), m.manhattan_sum_sin()}) ||
       m.manhattan_count() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
     Reject("saved wall axes are not finite or their count is out of range");
+  }
+  if (m.has_pose_cells_current() && m.pose_cells_current_id() >= n) Reject("saved pose-cell experience is unknown");
+  if (!std::isfinite(m.driven_since_recognition_m()) || m.driven_since_recognition_m() < 0) {
+    Reject("saved distance since the last recognition is not finite or negative");
   }
   if (m.sweep_experience() > n) Reject("saved sweep position out of range");
   for (uint32_t li : m.local_region_links()) {
@@ -598,6 +627,8 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   manhattan_sum_sin_ = m.manhattan_sum_sin();
   manhattan_count_ = static_cast<int>(m.manhattan_count());
   turned_since_hold_rad_ = std::numeric_limits<double>::max();  // the gate wide open
+  pose_cells_current_ = m.has_pose_cells_current() ? std::optional(m.pose_cells_current_id()) : std::nullopt;
+  driven_since_recognition_m_ = m.driven_since_recognition_m();
 }
 
 }  // namespace rslam::experience_map

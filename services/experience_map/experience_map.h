@@ -109,6 +109,13 @@ class ExperienceMap {
   // experience other than the current one; non-finite angle or offset.
   void Apply(const ExperienceAction& action);
 
+  // Recognitions refused by exp_recognition_max_jump_m so far (not saved).
+  uint64_t refused_recognitions() const { return refused_recognitions_; }
+  // After a refused recognition, the experience the pose cells take for current (the map keeps
+  // its own, current_id()); actions from either are accepted until the next create or
+  // recognition taken.
+  std::optional<uint32_t> pose_cells_current() const { return pose_cells_current_; }
+
   // One frame's correction budget only (Apply calls it). Returns link relaxations done.
   int CorrectBudgeted();
   // Largest change (m or rad) one link relaxation made during the last Apply, CorrectBudgeted
@@ -161,6 +168,11 @@ class ExperienceMap {
   double RelaxLink(uint32_t index);
   void SeedLocalRegion(uint32_t a, uint32_t b);
   void ValidateIds(const ExperienceAction& a) const;
+  // exp_recognition_max_jump_m: the recognition `a` (kLink or kSet, ids valid) would move the
+  // robot too far from where the map has it.
+  bool RefusesRecognition(const ExperienceAction& a) const;
+  // The map's current experience, or the pose cells' after a refused recognition.
+  bool IsCurrent(uint32_t id) const { return id == current_ || pose_cells_current_ == id; }
 
   const ExperienceMapConfig config_;
   std::vector<Experience> experiences_;
@@ -197,6 +209,10 @@ class ExperienceMap {
   // Turned (rad, summed absolute) since a wall direction last held the heading: widens the gate.
   // A loaded map starts with the gate wide open (its heading's history is not saved).
   double turned_since_hold_rad_ = 0.0;
+  // exp_recognition_max_jump_m: metres driven since the last recognition taken (or the start).
+  double driven_since_recognition_m_ = 0.0;
+  std::optional<uint32_t> pose_cells_current_;
+  uint64_t refused_recognitions_ = 0;
   bool graph_pending_ = false;    // links changed since the last least-squares correction
   int frames_since_graph_ = 0;
 };

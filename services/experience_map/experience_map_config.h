@@ -59,6 +59,15 @@ struct ExperienceMapConfig {
   // off, a round table's chords); a fixed narrow one never pulls back a heading that drifted past
   // it. Only the floor odometry (odometry.floor_odometry) reports wall directions; without it the
   // keys change nothing.
+  // Not OpenRatSLAM's: a recognition (kLink or kSet) that would put the robot farther from
+  // where the map has it than exp_recognition_max_jump_m, plus exp_recognition_jump_per_m for
+  // each metre driven since the last recognition the map took, is refused: no link, the robot
+  // stays where the map has it (and its next experience links from the map's current one). A
+  // place seen twice looks alike (a corner, a stretch of wall) however far apart the two are;
+  // the map, corrected at every recognition, knows the robot to within its drift since the last.
+  // 0: every recognition is taken.
+  double exp_recognition_max_jump_m = 0.0;
+  double exp_recognition_jump_per_m = 0.0;
   bool exp_manhattan = false;
   int exp_manhattan_reference_frames = 50;
   double exp_manhattan_min_offset_rad = 0.25;
@@ -97,6 +106,10 @@ struct ExperienceMapConfig {
     v("exp_graph_closure_sigma_rad", exp_graph_closure_sigma_rad, "uncertainty of a recognised place's facing (rad)");
     v("exp_graph_closure_robust_phi", exp_graph_closure_robust_phi,
       "> 0: recognitions far off the rest of the map (chi^2 >> phi) weigh less (dynamic covariance scaling)");
+    v("exp_recognition_max_jump_m", exp_recognition_max_jump_m,
+      "> 0: a recognition that would move the robot farther than this from where the map has it is refused (m)");
+    v("exp_recognition_jump_per_m", exp_recognition_jump_per_m,
+      "... plus this for each metre driven since the last recognition taken");
     v("exp_manhattan", exp_manhattan, "hold the robot's heading to the walls' two perpendicular directions");
     v("exp_manhattan_reference_frames", exp_manhattan_reference_frames, "wall directions that fix the axes at the start");
     v("exp_manhattan_min_offset_rad", exp_manhattan_min_offset_rad,
@@ -128,6 +141,10 @@ struct ExperienceMapConfig {
     Require(exp_graph_closure_sigma_rad > 0, "exp_graph_closure_sigma_rad", "must be positive");
     Require(std::isfinite(exp_graph_closure_robust_phi) && exp_graph_closure_robust_phi >= 0,
             "exp_graph_closure_robust_phi", "must be >= 0");
+    Require(std::isfinite(exp_recognition_max_jump_m) && exp_recognition_max_jump_m >= 0,
+            "exp_recognition_max_jump_m", "must be >= 0");
+    Require(std::isfinite(exp_recognition_jump_per_m) && exp_recognition_jump_per_m >= 0,
+            "exp_recognition_jump_per_m", "must be >= 0");
     Require(exp_manhattan_reference_frames >= 1, "exp_manhattan_reference_frames", "must be at least 1");
     Require(std::isfinite(exp_manhattan_max_offset_rad) && exp_manhattan_max_offset_rad > 0 &&
                 exp_manhattan_max_offset_rad < std::numbers::pi / 4,

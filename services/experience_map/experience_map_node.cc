@@ -149,8 +149,13 @@ class ExperienceMapNode::Mapper {
         spdlog::info("frame {}: the walls' axes are at {:.3f} rad (mod pi/2) in the map frame; holding the heading to them",
                      m.header.frame_seq, *map_.manhattan_axes());
     }
+    const uint64_t refused_before = map_.refused_recognitions();
     try {
       map_.Apply(FromActionMessage(m));
+      if (map_.refused_recognitions() != refused_before)
+        spdlog::info("frame {}: recognition of experience {} refused: it would move the robot too far from where the "
+                     "map has it (exp_recognition_max_jump_m)",
+                     m.header.frame_seq, m.experience_id);
     } catch (const std::invalid_argument& e) {
       context_.Reject("action_ids", "action " + std::to_string(m.action_seq) + " (" + msg::ToString(m.kind) + "): " + e.what());
       map_.Apply(ExperienceAction{});  // the frame's correction budget is still spent

@@ -634,6 +634,81 @@ TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
   }
 }
 
+TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
+  ExperienceMapConfig config;
+  config.exp_initial_em_deg = 0;
+  config.exp_recognition_max_jump_m = 2.0;
+  config.exp_recognition_jump_per_m = 0.5;
+  config.exp_relax_budget_links = 0;
+  config.exp_loops = 0;  // no correction: the experiences stay where they were laid
+  ExperienceMap map(config);
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(5.0, 0.0, 1.0);
+  map.Apply(Create(1, 0));
+  map.Integrate(5.0, 0.0, 1.0);
+  map.Apply(Create(2, 1));
+  map.Integrate(1.0, 0.0, 1.0);  // the robot at (11, 0), 11 m driven since the start: 7.5 m allowed
+  ASSERT_EQ(map.links().size(), 2u);
+
+  // Experience 0, 11 m behind: refused. No link; the robot stays; the pose cells' current
+  // experience (0) is accepted as the origin of their next action, which the map takes from its own.
+  map.Apply(LinkTo(Kind::kLink, 2, 0));
+  EXPECT_EQ(map.refused_recognitions(), 1u);
+  EXPECT_EQ(map.links().size(), 2u);
+  EXPECT_EQ(map.current_id(), 2u);
+  EXPECT_EQ(map.pose_cells_current(), std::optional<uint32_t>(0));
+  EXPECT_NEAR(map.RobotPose().x, 11.0, 1e-9);
+
+  // A saved and loaded map keeps that.
+  ExperienceMap loaded(config);
+  loaded.Load(map.Save());
+  EXPECT_EQ(loaded.pose_cells_current(), std::optional<uint32_t>(0));
+  map.Apply(Create(3, 0));
+  loaded.Apply(Create(3, 0));
+  for (const ExperienceMap* m : {&map, &loaded}) {
+    EXPECT_EQ(m->links().back().from_id, 2u);
+    EXPECT_NEAR(m->links().back().d_m, 1.0, 1e-9);
+    EXPECT_NEAR(m->experiences()[3].x_m, 11.0, 1e-9);
+    EXPECT_FALSE(m->pose_cells_current().has_value());
+  }
+  EXPECT_THROW(map.Apply(LinkTo(Kind::kLink, 0, 1)), std::invalid_argument);  // 0 is nobody's current now
+
+  // Experience 1, 6 m behind: taken (the robot put on it), and the distance allowed starts
+  // again from 2 m.
+  map.Apply(LinkTo(Kind::kLink, 3, 1));
+  EXPECT_EQ(map.refused_recognitions(), 1u);
+  EXPECT_TRUE(map.links().back().closes_loop);
+  EXPECT_EQ(map.current_id(), 1u);
+  EXPECT_NEAR(map.RobotPose().x, 5.0, 1e-9);
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Integrate(-1.0, 0.0, 1.0);  // 2 m driven, back at (5, 0): 3 m allowed
+  map.Apply(LinkTo(Kind::kSet, 1, 2));  // 5 m
+  EXPECT_EQ(map.refused_recognitions(), 2u);
+  EXPECT_EQ(map.current_id(), 1u);
+  map.Integrate(2.5, 0.0, 1.0);
+  map.Integrate(-2.5, 0.0, 1.0);  // 7 m driven: 5.5 m allowed
+  map.Apply(LinkTo(Kind::kSet, 2, 3));  // 6 m, from the pose cells' current
+  EXPECT_EQ(map.refused_recognitions(), 3u);
+  EXPECT_EQ(map.pose_cells_current(), std::optional<uint32_t>(3));
+  map.Apply(LinkTo(Kind::kSet, 3, 0));  // 5 m: taken
+  EXPECT_EQ(map.refused_recognitions(), 3u);
+  EXPECT_EQ(map.current_id(), 0u);
+  EXPECT_FALSE(map.pose_cells_current().has_value());
+
+  for (auto [key, bad] : {std::pair<std::string, std::function<void(ExperienceMapConfig&)>>{
+                              "exp_recognition_max_jump_m", [](ExperienceMapConfig& c) { c.exp_recognition_max_jump_m = -1; }},
+                          {"exp_recognition_jump_per_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_per_m = NAN; }}}) {
+    ExperienceMapConfig c = config;
+    bad(c);
+    try {
+      c.Validate();
+      ADD_FAILURE() << key << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(e.key(), key);
+    }
+  }
+}
+
 TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurns) {
   ExperienceMapConfig config = HeldToWalls();
   config.exp_manhattan_min_offset_rad = 0.1;
