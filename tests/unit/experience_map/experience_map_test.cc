@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <initializer_list>
 #include <string>
 #include <utility>
 #include <limits>
@@ -553,6 +554,22 @@ TEST(ExperienceMap, LeastSquaresKeysOutOfRangeAreRefused) {
   EXPECT_THROW(iterations.Validate(), ConfigError);
 }
 
+// Each (key, change) makes `base` invalid: Validate names that key.
+void ExpectKeysRefused(
+    const ExperienceMapConfig& base,
+    std::initializer_list<std::pair<std::string, std::function<void(ExperienceMapConfig&)>>> changes) {
+  for (const auto& [key, change] : changes) {
+    ExperienceMapConfig c = base;
+    change(c);
+    try {
+      c.Validate();
+      ADD_FAILURE() << key << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(e.key(), key);
+    }
+  }
+}
+
 ExperienceMapConfig HeldToWalls() {
   ExperienceMapConfig c;
   c.exp_initial_em_deg = 0;
@@ -619,19 +636,10 @@ TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
   reloaded.Load(loaded.Save());
   EXPECT_EQ(reloaded.manhattan_axes(), loaded.manhattan_axes());
 
-  for (auto [key, bad] : {std::pair<std::string, std::function<void(ExperienceMapConfig&)>>{
-                              "exp_manhattan_gain", [](ExperienceMapConfig& c) { c.exp_manhattan_gain = 0; }},
-                          {"exp_manhattan_max_offset_rad", [](ExperienceMapConfig& c) { c.exp_manhattan_max_offset_rad = 0.8; }},
-                          {"exp_manhattan_reference_frames", [](ExperienceMapConfig& c) { c.exp_manhattan_reference_frames = 0; }}}) {
-    ExperienceMapConfig c = HeldToWalls();
-    bad(c);
-    try {
-      c.Validate();
-      ADD_FAILURE() << key << " accepted";
-    } catch (const ConfigError& e) {
-      EXPECT_EQ(e.key(), key);
-    }
-  }
+  ExpectKeysRefused(HeldToWalls(),
+                    {{"exp_manhattan_gain", [](ExperienceMapConfig& c) { c.exp_manhattan_gain = 0; }},
+                     {"exp_manhattan_max_offset_rad", [](ExperienceMapConfig& c) { c.exp_manhattan_max_offset_rad = 0.8; }},
+                     {"exp_manhattan_reference_frames", [](ExperienceMapConfig& c) { c.exp_manhattan_reference_frames = 0; }}});
 }
 
 TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
@@ -695,18 +703,9 @@ TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
   EXPECT_EQ(map.current_id(), 0u);
   EXPECT_FALSE(map.pose_cells_current().has_value());
 
-  for (auto [key, bad] : {std::pair<std::string, std::function<void(ExperienceMapConfig&)>>{
-                              "exp_recognition_max_jump_m", [](ExperienceMapConfig& c) { c.exp_recognition_max_jump_m = -1; }},
-                          {"exp_recognition_jump_per_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_per_m = NAN; }}}) {
-    ExperienceMapConfig c = config;
-    bad(c);
-    try {
-      c.Validate();
-      ADD_FAILURE() << key << " accepted";
-    } catch (const ConfigError& e) {
-      EXPECT_EQ(e.key(), key);
-    }
-  }
+  ExpectKeysRefused(config,
+                    {{"exp_recognition_max_jump_m", [](ExperienceMapConfig& c) { c.exp_recognition_max_jump_m = -1; }},
+                     {"exp_recognition_jump_per_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_per_m = NAN; }}});
 }
 
 TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurns) {
@@ -746,19 +745,9 @@ TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurn
   loaded.HoldHeading(0.28 - before);
   EXPECT_NEAR(loaded.RobotPose().theta, before - 0.056, 1e-12);
 
-  for (auto [key, bad] : {std::pair<std::string, std::function<void(ExperienceMapConfig&)>>{
-                              "exp_manhattan_min_offset_rad", [](ExperienceMapConfig& c) { c.exp_manhattan_min_offset_rad = 0; }},
-                          {"exp_manhattan_offset_per_rad_turned",
-                           [](ExperienceMapConfig& c) { c.exp_manhattan_offset_per_rad_turned = -0.1; }}}) {
-    ExperienceMapConfig c = config;
-    bad(c);
-    try {
-      c.Validate();
-      ADD_FAILURE() << key << " accepted";
-    } catch (const ConfigError& e) {
-      EXPECT_EQ(e.key(), key);
-    }
-  }
+  ExpectKeysRefused(config, {{"exp_manhattan_min_offset_rad", [](ExperienceMapConfig& c) { c.exp_manhattan_min_offset_rad = 0; }},
+                             {"exp_manhattan_offset_per_rad_turned",
+                              [](ExperienceMapConfig& c) { c.exp_manhattan_offset_per_rad_turned = -0.1; }}});
 }
 
 // The robot drives straight along walls that lie on the map's axes (seen at 0 rad in the robot
