@@ -106,7 +106,8 @@ class ExperienceMap {
   // with kind kNone when the pose cells emitted nothing). Throws std::invalid_argument, with the
   // map unchanged, when ids are inconsistent: kCreate of an id other than the next dense id or
   // from an experience other than the current one; kLink/kSet of unknown ids or from an
-  // experience other than the current one; non-finite angle or offset.
+  // experience other than the current one; non-finite angle or offset. A recognition too far
+  // from where the map has the robot is refused (exp_recognition_max_jump_m).
   void Apply(const ExperienceAction& action);
 
   // Recognitions refused by exp_recognition_max_jump_m so far (not saved).

@@ -47,6 +47,15 @@ struct ExperienceMapConfig {
   double exp_graph_closure_sigma_m = 0.1;
   double exp_graph_closure_sigma_rad = 0.01;
   double exp_graph_closure_robust_phi = 0.0;  // 0: every recognition weighs by its sigmas alone
+  // Not OpenRatSLAM's: a recognition (kLink or kSet) that would put the robot farther from
+  // where the map has it than exp_recognition_max_jump_m, plus exp_recognition_jump_per_m for
+  // each metre driven since the last recognition the map took, is refused: no link, the robot
+  // stays where the map has it (and its next experience links from the map's current one). A
+  // place seen twice looks alike (a corner, a stretch of wall) however far apart the two are;
+  // the map, corrected at every recognition, knows the robot to within its drift since the last.
+  // 0: every recognition is taken.
+  double exp_recognition_max_jump_m = 0.0;
+  double exp_recognition_jump_per_m = 0.0;
   // The robot's heading held to the building's walls (ExperienceMap::HoldHeading): most walls run
   // along two perpendicular directions (the Manhattan-world assumption). The first
   // exp_manhattan_reference_frames wall directions the odometry reports fix those axes in the
@@ -59,15 +68,6 @@ struct ExperienceMapConfig {
   // off, a round table's chords); a fixed narrow one never pulls back a heading that drifted past
   // it. Only the floor odometry (odometry.floor_odometry) reports wall directions; without it the
   // keys change nothing.
-  // Not OpenRatSLAM's: a recognition (kLink or kSet) that would put the robot farther from
-  // where the map has it than exp_recognition_max_jump_m, plus exp_recognition_jump_per_m for
-  // each metre driven since the last recognition the map took, is refused: no link, the robot
-  // stays where the map has it (and its next experience links from the map's current one). A
-  // place seen twice looks alike (a corner, a stretch of wall) however far apart the two are;
-  // the map, corrected at every recognition, knows the robot to within its drift since the last.
-  // 0: every recognition is taken.
-  double exp_recognition_max_jump_m = 0.0;
-  double exp_recognition_jump_per_m = 0.0;
   bool exp_manhattan = false;
   int exp_manhattan_reference_frames = 50;
   double exp_manhattan_min_offset_rad = 0.25;
