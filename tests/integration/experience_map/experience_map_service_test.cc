@@ -201,6 +201,37 @@ TEST_F(ExperienceMapServiceTest, WallDirectionsInTheActionsHoldTheHeadingWithExp
   EXPECT_TRUE(service->Running());
 }
 
+// Experience 0 recognised 6 m from where the map has the robot: refused (no link, the robot
+// stays); the pose cells, now at 0, create the next experience from it, which the service takes.
+TEST_F(ExperienceMapServiceTest, ARecognitionFarFromTheMapsRobotIsRefusedAndTheNextCreateTaken) {
+  auto service = Start({"--set", "experience_map.exp_initial_em_deg=0", "--set",
+                        "experience_map.exp_recognition_max_jump_m=1"});
+  uint64_t seq = 0;
+  action_pub_->Publish(Action(seq++, msg::ActionKind::ACTION_CREATE, 0, kNone));
+  while (seq < 30) action_pub_->Publish(Action(seq++, msg::ActionKind::ACTION_NONE, kNone, kNone));
+  action_pub_->Publish(Action(seq++, msg::ActionKind::ACTION_CREATE, 1, 0));
+  while (seq < 60) action_pub_->Publish(Action(seq++, msg::ActionKind::ACTION_NONE, kNone, kNone));
+  action_pub_->Publish(Action(seq++, msg::ActionKind::ACTION_LINK, 0, 1));
+  action_pub_->Publish(Action(seq++, msg::ActionKind::ACTION_CREATE, 2, 0));
+  const auto poses = AwaitPoses(seq);
+  ASSERT_EQ(poses.size(), seq) << service->Output();
+  const msg::ExperiencePose& refused = poses[seq - 2];
+  EXPECT_EQ(refused.current_experience_id, 1u);
+  EXPECT_NEAR(refused.x_m, 6.1, 1e-6);
+  EXPECT_EQ(refused.link_count, 1u);
+  const msg::ExperiencePose& created = poses[seq - 1];
+  EXPECT_EQ(created.current_experience_id, 2u);
+  EXPECT_EQ(created.experience_count, 3u);
+  EXPECT_EQ(created.link_count, 2u);  // 0 -> 1, 1 -> 2
+  EXPECT_NEAR(created.x_m, 6.2, 1e-6);
+  std::optional<msg::ServiceStatus> status;  // the newest after the last pose (a heartbeat is 0.2 s)
+  for (const auto until = std::chrono::steady_clock::now() + 600ms; std::chrono::steady_clock::now() < until;)
+    if (auto s = status_sub_->TakeOne(100ms); s && s->service == "experience_map") status = s;
+  ASSERT_TRUE(status) << service->Output();
+  EXPECT_EQ(status->messages_rejected, 0u) << service->Output();
+  EXPECT_NE(service->Output().find("recognition of experience 0 refused"), std::string::npos) << service->Output();
+}
+
 TEST_F(ExperienceMapServiceTest, WallDirectionsChangeNothingWithoutExpManhattan) {
   auto service = Start({"--set", "experience_map.exp_initial_em_deg=0"});
   const auto poses = DriveStraightPastWalls();
