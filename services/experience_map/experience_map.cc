@@ -142,10 +142,9 @@ void ExperienceMap::SetCurrent(uint32_t id, const ExperienceAction& a) {
 bool ExperienceMap::RefusesRecognition(const ExperienceAction& a) const {
   if (config_.exp_recognition_max_jump_m <= 0) return false;
   const Experience& e = experiences_[a.experience_id];
-  const double c = std::cos(e.th_rad), s = std::sin(e.th_rad);
+  const Pose2D placed = Compose({e.x_m, e.y_m, e.th_rad}, {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
   const Pose2D robot = RobotPose();
-  const double jump = std::hypot(e.x_m + c * a.offset_x_m - s * a.offset_y_m - robot.x,
-                                 e.y_m + s * a.offset_x_m + c * a.offset_y_m - robot.y);
+  const double jump = std::hypot(placed.x - robot.x, placed.y - robot.y);
   return jump > config_.exp_recognition_max_jump_m + config_.exp_recognition_jump_per_m * driven_since_recognition_m_;
 }
 

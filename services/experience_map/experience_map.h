@@ -107,7 +107,9 @@ class ExperienceMap {
   // map unchanged, when ids are inconsistent: kCreate of an id other than the next dense id or
   // from an experience other than the current one; kLink/kSet of unknown ids or from an
   // experience other than the current one; non-finite angle or offset. A recognition too far
-  // from where the map has the robot is refused (exp_recognition_max_jump_m).
+  // from where the map has the robot is refused (exp_recognition_max_jump_m); until the next
+  // create or recognition taken, actions from the refused experience (the pose cells' current)
+  // count as from the current one.
   void Apply(const ExperienceAction& action);
 
   // Recognitions refused by exp_recognition_max_jump_m so far (not saved).
