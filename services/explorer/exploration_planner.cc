@@ -90,6 +90,21 @@ void ExplorationPlanner::SetAside(int x, int y, std::string reason, bool blocked
   if (!IsSetAside(x, y)) set_aside_.push_back({x, y, std::move(reason), blocked});
 }
 
+void ExplorationPlanner::StartFinishing() {
+  const int k = config_.coarse_cell_factor / config_.finishing_cell_factor;
+  std::vector<SetAsideGoal> set_aside;
+  for (const SetAsideGoal& g : set_aside_)
+    for (int dy = 0; dy < k; ++dy)
+      for (int dx = 0; dx < k; ++dx) set_aside.push_back({g.x * k + dx, g.y * k + dy, g.reason, g.blocked});
+  std::map<std::pair<int, int>, int> blocked;
+  for (const auto& [cell, attempts] : blocked_attempts_)
+    for (int dy = 0; dy < k; ++dy)
+      for (int dx = 0; dx < k; ++dx) blocked[{cell.first * k + dx, cell.second * k + dy}] = attempts;
+  set_aside_ = std::move(set_aside);
+  blocked_attempts_ = std::move(blocked);
+  finishing_ = true;
+}
+
 void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair<double, double>> obstacle) {
   if (obstacle) {
     if (!std::isfinite(obstacle->first) || !std::isfinite(obstacle->second))
@@ -97,12 +112,19 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
     blocking_obstacles_.push_back(*obstacle);
   }
   if (plan.goal_x < 0) return;
-  // Every max_blocked_attempts refusals set the goal aside (PlanFrom may try it again).
-  if (++blocked_attempts_[{plan.goal_x, plan.goal_y}] % config_.max_blocked_attempts == 0)
-    SetAside(plan.goal_x, plan.goal_y,
-             "look before you move found the way blocked " + std::to_string(config_.max_blocked_attempts) +
-                 " times",
-             true);
+  // Every max_blocked_attempts refusals set the goal aside (PlanFrom may try it again). On the
+  // finer grid they count for the cells of the coarse cell holding the goal together: the way to
+  // each is mostly the same, and one by one a cluster of small goals behind a gap too narrow for
+  // the robot took a demo run's last 100 s.
+  const int k = finishing_ ? config_.coarse_cell_factor / config_.finishing_cell_factor : 1;
+  const int x0 = plan.goal_x / k * k, y0 = plan.goal_y / k * k;
+  for (int y = y0; y < y0 + k; ++y)
+    for (int x = x0; x < x0 + k; ++x)
+      if (++blocked_attempts_[{x, y}] % config_.max_blocked_attempts == 0)
+        SetAside(x, y,
+                 "look before you move found the way blocked " + std::to_string(config_.max_blocked_attempts) +
+                     " times",
+                 true);
 }
 
 void ExplorationPlanner::ReportBump(const Plan& plan, const Pose2D& at, bool backwards) {
@@ -222,7 +244,12 @@ std::vector<std::pair<double, double>> ExplorationPlanner::Straighten(
 
 Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
   if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
-  const CoarseGrid cs = BuildConfigurationSpace(occupancy, config_);
+  ExplorerConfig grid_config = config_;
+  if (finishing_) {
+    grid_config.coarse_cell_factor = config_.finishing_cell_factor;
+    grid_config.min_unknown_cells_for_goal = config_.finishing_min_unknown_cells;
+  }
+  const CoarseGrid cs = BuildConfigurationSpace(occupancy, grid_config);
   const int rx = cs.CellX(robot.x), ry = cs.CellY(robot.y);
   if (!cs.Contains(rx, ry)) throw std::invalid_argument("robot is outside the map");
   if (std::optional<Plan> out = StepOutOfRadius(occupancy, robot)) return *out;
@@ -350,6 +377,12 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
           if (!near_blocking[i]) traversable[i] = 1;
         }
         continue;
+      }
+      if (config_.finishing_cell_factor > 0 && !finishing_) {
+        StartFinishing();
+        Plan finer = PlanFrom(occupancy, robot);
+        if (!finer.complete) finer.reason = "on the finer grid: " + finer.reason;
+        return finer;
       }
       plan.complete = true;
       plan.commands.push_back({MotionCommand::Kind::kStop});
@@ -515,6 +548,7 @@ proto::ExplorerState ExplorationPlanner::ToProto() const {
   if (last_pirouette_) {
     SavePose(*last_pirouette_, state.mutable_last_pirouette());
   }
+  state.set_finishing(finishing_);
   return state;
 }
 
@@ -536,6 +570,8 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
       throw std::invalid_argument("explorer state: blocking obstacle not finite");
     obstacles.emplace_back(o.x(), o.y());
   }
+  if (state.finishing() && config_.finishing_cell_factor == 0)
+    throw std::invalid_argument("explorer state: saved on the finer grid, but finishing_cell_factor is 0");
   std::optional<Pose2D> last;
   if (state.has_last_pirouette()) {
     last = LoadPose(state.last_pirouette());
@@ -545,6 +581,7 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
   blocked_attempts_ = std::move(blocked);
   blocking_obstacles_ = std::move(obstacles);
   last_pirouette_ = last;
+  finishing_ = state.finishing();
 }
 
 }  // namespace rslam::explorer

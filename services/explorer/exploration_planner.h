@@ -8,7 +8,8 @@
 //     moves (their obstacles, the goals set aside after them) is all that stands in the way: then
 //     it looks all round and tries those goals again (blocked_goal_retries); or unless a way
 //     through the margin itself leads to unknown space (squeeze_through_margin: doors narrower
-//     than the robot plus both margins);
+//     than the robot plus both margins); or unless the finer grid of finishing_cell_factor, on
+//     which the planner then goes on to the end, still reaches unknown space;
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
 //     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees;
@@ -102,6 +103,10 @@ class ExplorationPlanner {
   void ReportBump(const Plan& plan, const Pose2D& at, bool backwards);
 
   const std::vector<SetAsideGoal>& set_aside_goals() const { return set_aside_; }
+  // On the finer grid of finishing_cell_factor (goal and set-aside cells are its cells).
+  bool finishing() const { return finishing_; }
+  // Occupancy cells per exploration cell a side, on the grid in use.
+  int cell_factor() const { return finishing_ ? config_.finishing_cell_factor : config_.coarse_cell_factor; }
 
   proto::ExplorerState ToProto() const;
   // Replaces this planner's state; validates the whole message first (std::invalid_argument).
@@ -110,6 +115,8 @@ class ExplorationPlanner {
 
  private:
   void SetAside(int x, int y, std::string reason, bool blocked = false);
+  // Goes on to the finer grid: set-aside and blocked goal cells become the cells covering them.
+  void StartFinishing();
   // True when the straight segment from `from` along its heading for distance_m passes within the
   // robot radius of an obstacle reported since the last pirouette.
   bool PassesBlockingObstacle(const Pose2D& from, double distance_m) const;
@@ -136,6 +143,7 @@ class ExplorationPlanner {
   std::map<std::pair<int, int>, int> blocked_attempts_;
   std::vector<SetAsideGoal> set_aside_;
   std::vector<std::pair<double, double>> blocking_obstacles_;  // since the last pirouette
+  bool finishing_ = false;
 };
 
 }  // namespace rslam::explorer

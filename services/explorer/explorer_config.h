@@ -22,6 +22,13 @@ struct ExplorerConfig {
   int blocked_goal_retries = 1;       // times such a goal is tried again before exploration ends
   bool squeeze_through_margin = true; // before calling exploration complete, plan through the margin
   bool straighten_paths = true;       // cut the grid path's corners where a straight move is clear
+  // Before calling exploration complete, look once more on a finer exploration grid (this many
+  // occupancy cells a side, dividing coarse_cell_factor; 0 = off) and explore on it to the end.
+  // A coarse cell is free only if the whole cell clears the margin, so a gap 0.8 m wide (a round
+  // table's opening in the demo world) often has no free cell across it: the space behind stays
+  // unknown and exploration ends. Finer cells all the way are slower (more, smaller goals).
+  int finishing_cell_factor = 0;
+  int finishing_min_unknown_cells = 1;  // min_unknown_cells_for_goal on the finer grid
 
   template <class V>
   void VisitFields(V& v) {
@@ -42,6 +49,10 @@ struct ExplorerConfig {
       "when no unknown space is reachable over free cells, plan through the dilation margin (moves still keep the radius)");
     v("straighten_paths", straighten_paths,
       "skip a waypoint of the grid path where the straight move past it stays on the path's cells and is clear");
+    v("finishing_cell_factor", finishing_cell_factor,
+      "before calling exploration complete, go on with exploration cells of this many occupancy cells (0 = off)");
+    v("finishing_min_unknown_cells", finishing_min_unknown_cells,
+      "unknown occupancy cells needed to make a cell of that finer grid a goal");
   }
   void Validate() const {
     Require(std::isfinite(robot_radius_m) && robot_radius_m >= 0 && robot_radius_m < 10,
@@ -51,6 +62,10 @@ struct ExplorerConfig {
     Require(pirouette_steps >= 1 && pirouette_steps <= 360, "pirouette_steps", "must be 1..360");
     Require(max_blocked_attempts >= 1, "max_blocked_attempts", "must be >= 1");
     Require(blocked_goal_retries >= 0 && blocked_goal_retries <= 100, "blocked_goal_retries", "must be 0..100");
+    Require(finishing_cell_factor == 0 || (finishing_cell_factor >= 1 && finishing_cell_factor < coarse_cell_factor &&
+                                           coarse_cell_factor % finishing_cell_factor == 0),
+            "finishing_cell_factor", "must be 0 or a divisor of coarse_cell_factor smaller than it");
+    Require(finishing_min_unknown_cells >= 1, "finishing_min_unknown_cells", "must be >= 1");
   }
 };
 

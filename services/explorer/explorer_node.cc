@@ -265,7 +265,7 @@ class ExplorerNode::Controller {
       }
       state_ = msg::ExplorationState::EXPLORATION_EXPLORING;
       if (plan_->goal_x >= 0) {
-        const double cell = grid_->resolution_m * config_.planner.coarse_cell_factor;
+        const double cell = grid_->resolution_m * planner_.cell_factor();
         goal_x_m_ = grid_->origin_x_m + (plan_->goal_x + 0.5) * cell;
         goal_y_m_ = grid_->origin_y_m + (plan_->goal_y + 0.5) * cell;
       }

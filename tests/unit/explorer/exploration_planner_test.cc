@@ -628,6 +628,80 @@ TEST(ExplorationPlannerTest, ARefusalOnTheWayThroughTheMarginIsLookedAtBeforeCal
   EXPECT_TRUE(planner.PlanFrom(grid.View(), robot).complete);
 }
 
+// 6 m x 3 m, 5 cm cells: a known room, a wall at x = 5 m with a 75 cm gap (cells y 21..35, a
+// round table's opening in the demo world), unknown space beyond it but for the gap itself and
+// the column just past it. With a 20 cm robot radius (25 cm margins) the gap keeps a band of
+// centres 25 cm wide (y 26..30): on 20 cm exploration cells (y 24..27, 28..31) none lies in it and
+// the cell holding the gap has unseen cells, so neither the free cells nor a squeeze through the
+// margin reach the unknown space; on 10 cm cells (y 26..27, 28..29) they do.
+TestGrid RoomWithARoundTablesGap() {
+  TestGrid grid(120, 60, 0);
+  for (int y = 0; y < 60; ++y)
+    if (y < 21 || y > 35) grid.Set(100, y, 100);
+  for (int y = 1; y < 59; ++y)
+    for (int x = 101; x < 119; ++x) grid.Set(x, y, x == 101 && y >= 21 && y <= 35 ? 0 : -1);
+  return grid;
+}
+
+TEST(ExplorationPlannerTest, GoesOnOnAFinerGridBeforeCallingItComplete) {
+  const TestGrid grid = RoomWithARoundTablesGap();
+  ExplorerConfig config = Config();
+  config.robot_radius_m = 0.2;
+  config.coarse_cell_factor = 4;
+  const Pose2D robot{2.0, 1.4, 0.0};
+  EXPECT_TRUE(ExplorationPlanner(config).PlanFrom(grid.View(), robot).complete);
+  config.finishing_cell_factor = 2;
+  ExplorationPlanner planner(config);
+  Plan refused;  // one refusal on the coarse grid ...
+  refused.goal_x = 3;
+  refused.goal_y = 2;
+  planner.ReportBlocked(refused);
+  EXPECT_EQ(planner.cell_factor(), 4);
+  const Plan plan = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(plan.complete) << plan.reason;
+  EXPECT_TRUE(planner.finishing());
+  EXPECT_EQ(planner.cell_factor(), 2);
+  EXPECT_NE(plan.reason.find("on the finer grid"), std::string::npos) << plan.reason;
+  EXPECT_GT(plan.target.x, 4.5);
+  EXPECT_NEAR(plan.target.y, 1.4, 0.1);
+  EXPECT_EQ(plan.goal_x, 51);  // the finer grid's cells (x 102..103: unseen)
+  ExpectMovesClear(planner, grid.View(), plan, robot);
+  // ... counts on the finer grid for the four cells that covered it.
+  const proto::ExplorerState saved = planner.ToProto();
+  EXPECT_TRUE(saved.finishing());
+  EXPECT_EQ(saved.blocked_size(), 4);
+  // A restarted explorer goes on where it was; one configured without the finer grid refuses the state.
+  ExplorationPlanner restarted(config);
+  restarted.LoadProto(saved);
+  EXPECT_TRUE(restarted.finishing());
+  EXPECT_EQ(restarted.PlanFrom(grid.View(), robot).goal_x, 51);
+  config.finishing_cell_factor = 0;
+  EXPECT_THROW(ExplorationPlanner(config).LoadProto(saved), std::invalid_argument);
+  // Once the space beyond is known, exploration is complete on the finer grid too.
+  TestGrid seen = grid;
+  for (int y = 1; y < 59; ++y)
+    for (int x = 101; x < 119; ++x) seen.Set(x, y, 0);
+  const Plan done = planner.PlanFrom(seen.View(), robot);
+  EXPECT_TRUE(done.complete) << done.reason;
+}
+
+TEST(ExplorationPlannerTest, TheFinerGridMustDivideTheCoarseOne) {
+  ExplorerConfig config = Config();
+  config.coarse_cell_factor = 4;
+  for (const int bad : {-1, 3, 4, 8}) {
+    config.finishing_cell_factor = bad;
+    try {
+      ExplorationPlanner planner(config);
+      ADD_FAILURE() << "finishing_cell_factor " << bad << " accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("finishing_cell_factor"), std::string::npos) << e.what();
+    }
+  }
+  config.finishing_cell_factor = 2;
+  config.finishing_min_unknown_cells = 0;
+  EXPECT_THROW(ExplorationPlanner{config}, ConfigError);
+}
+
 // Heading of a plan's first straight move from `from`; none without one.
 std::optional<double> FirstMoveHeading(const Plan& plan, Pose2D from) {
   for (const MotionCommand& c : plan.commands) {
