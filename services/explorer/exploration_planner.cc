@@ -91,7 +91,7 @@ void ExplorationPlanner::SetAside(int x, int y, std::string reason, bool blocked
 }
 
 void ExplorationPlanner::StartFinishing() {
-  const int k = config_.coarse_cell_factor / config_.finishing_cell_factor;
+  const int k = FinerPerCoarse();
   std::vector<SetAsideGoal> set_aside;
   for (const SetAsideGoal& g : set_aside_)
     for (int dy = 0; dy < k; ++dy)
@@ -116,7 +116,7 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
   // finer grid they count for the cells of the coarse cell holding the goal together: the way to
   // each is mostly the same, and one by one a cluster of small goals behind a gap too narrow for
   // the robot took a demo run's last 100 s.
-  const int k = finishing_ ? config_.coarse_cell_factor / config_.finishing_cell_factor : 1;
+  const int k = finishing_ ? FinerPerCoarse() : 1;
   const int x0 = plan.goal_x / k * k, y0 = plan.goal_y / k * k;
   for (int y = y0; y < y0 + k; ++y)
     for (int x = x0; x < x0 + k; ++x)
@@ -245,10 +245,8 @@ std::vector<std::pair<double, double>> ExplorationPlanner::Straighten(
 Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
   if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
   ExplorerConfig grid_config = config_;
-  if (finishing_) {
-    grid_config.coarse_cell_factor = config_.finishing_cell_factor;
-    grid_config.min_unknown_cells_for_goal = config_.finishing_min_unknown_cells;
-  }
+  grid_config.coarse_cell_factor = cell_factor();
+  if (finishing_) grid_config.min_unknown_cells_for_goal = config_.finishing_min_unknown_cells;
   const CoarseGrid cs = BuildConfigurationSpace(occupancy, grid_config);
   const int rx = cs.CellX(robot.x), ry = cs.CellY(robot.y);
   if (!cs.Contains(rx, ry)) throw std::invalid_argument("robot is outside the map");

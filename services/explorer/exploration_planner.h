@@ -117,6 +117,8 @@ class ExplorationPlanner {
   void SetAside(int x, int y, std::string reason, bool blocked = false);
   // Goes on to the finer grid: set-aside and blocked goal cells become the cells covering them.
   void StartFinishing();
+  // Finer cells per coarse cell a side.
+  int FinerPerCoarse() const { return config_.coarse_cell_factor / config_.finishing_cell_factor; }
   // True when the straight segment from `from` along its heading for distance_m passes within the
   // robot radius of an obstacle reported since the last pirouette.
   bool PassesBlockingObstacle(const Pose2D& from, double distance_m) const;

@@ -100,14 +100,17 @@ class ExperienceMapServiceTest : public ::testing::Test {
     return AwaitPoses(kWallFrames - 1);  // the malformed one publishes nothing
   }
 
-  std::optional<msg::ServiceStatus> AwaitRejected(uint64_t min_rejected, std::chrono::milliseconds timeout = 5s) {
+  // The first heartbeat of the service that satisfies `done`.
+  template <class Done>
+  std::optional<msg::ServiceStatus> AwaitStatus(Done done, std::chrono::milliseconds timeout = 5s) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     while (std::chrono::steady_clock::now() < deadline) {
-      if (auto s = status_sub_->TakeOne(100ms);
-          s && s->service == "experience_map" && s->messages_rejected >= min_rejected)
-        return s;
+      if (auto s = status_sub_->TakeOne(100ms); s && s->service == "experience_map" && done(*s)) return s;
     }
     return std::nullopt;
+  }
+  std::optional<msg::ServiceStatus> AwaitRejected(uint64_t min_rejected) {
+    return AwaitStatus([&](const msg::ServiceStatus& s) { return s.messages_rejected >= min_rejected; });
   }
 
   testing::TestDomain domain_;
@@ -224,9 +227,8 @@ TEST_F(ExperienceMapServiceTest, ARecognitionFarFromTheMapsRobotIsRefusedAndTheN
   EXPECT_EQ(created.experience_count, 3u);
   EXPECT_EQ(created.link_count, 2u);  // 0 -> 1, 1 -> 2
   EXPECT_NEAR(created.x_m, 6.2, 1e-6);
-  std::optional<msg::ServiceStatus> status;  // the newest after the last pose (a heartbeat is 0.2 s)
-  for (const auto until = std::chrono::steady_clock::now() + 600ms; std::chrono::steady_clock::now() < until;)
-    if (auto s = status_sub_->TakeOne(100ms); s && s->service == "experience_map") status = s;
+  // A heartbeat once every action has been taken in.
+  const auto status = AwaitStatus([&](const msg::ServiceStatus& s) { return s.messages_in >= seq; });
   ASSERT_TRUE(status) << service->Output();
   EXPECT_EQ(status->messages_rejected, 0u) << service->Output();
   EXPECT_NE(service->Output().find("recognition of experience 0 refused"), std::string::npos) << service->Output();
