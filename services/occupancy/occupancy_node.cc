@@ -19,6 +19,7 @@
 #include "services/occupancy/frame_joiner.h"
 #include "services/occupancy/grid_export.h"
 #include "services/occupancy/obstacle_profile_pipeline.h"
+#include "services/occupancy/profile_message.h"
 
 namespace rslam::occupancy {
 
@@ -48,29 +49,6 @@ bool IsFinitePose(const msg::ExperiencePose& p) {
   return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad) &&
          std::isfinite(p.experience_x_m) && std::isfinite(p.experience_y_m) && std::isfinite(p.experience_theta_rad);
 }
-
-msg::ObstacleProfile ToMessage(const msg::Header& header, const AnchoredProfile& anchored, float max_range_m) {
-  msg::ObstacleProfile out;
-  out.header = header;
-  out.experience_id = static_cast<uint32_t>(anchored.experience_id);
-  out.offset_x_m = anchored.offset.x;
-  out.offset_y_m = anchored.offset.y;
-  out.offset_theta_rad = anchored.offset.theta;
-  const RadialObstacleProfile& rop = anchored.profile;
-  out.bearing_min_rad = static_cast<float>(rop.bins.empty() ? rop.first_bearing_rad : rop.BinCentre(0));
-  out.bearing_step_rad = static_cast<float>(rop.bin_width_rad);
-  out.max_range_m = max_range_m;
-  out.ranges_m.reserve(rop.bins.size());
-  for (const RopBin& bin : rop.bins) {
-    switch (bin.status) {
-      case BinStatus::kObstacle: out.ranges_m.push_back(bin.range_m); break;
-      case BinStatus::kBlind: out.ranges_m.push_back(0.0f); break;  // something closer than we can see
-      default: out.ranges_m.push_back(max_range_m); break;          // no obstacle seen
-    }
-  }
-  return out;
-}
-
 
 }  // namespace
 
@@ -265,7 +243,7 @@ class OccupancyNode::Mapper {
     latest_map_version_ = std::max(latest_map_version_, pose.map_version);
     last_header_ = pose.header;
     context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
-    profile_pub_->Publish(ToMessage(pose.header, kept ? map_.profiles().back() : anchored,
+    profile_pub_->Publish(ProfileToMessage(pose.header, kept ? map_.profiles().back() : anchored,
                                     static_cast<float>(config_.sensor.reliable_range_m)));
     if (frames_since_rebuild_ < std::numeric_limits<int>::max() / 2) ++frames_since_rebuild_;
     if (pending_correction_ && frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames)

@@ -193,12 +193,14 @@ int RunDemo(const DemoOptions& options) {
   const bool record = RecordCommandAvailable(bin_dir);
   const fs::path recording = out / "recording.mcap";
   if (record) {
-    launch::LaunchEntry recorder{.name = "recorder", .command = {"rslam", "record", "-o", recording.string(), "--robot", options.robot}};
+    launch::LaunchEntry recorder;
+    recorder.name = "recorder";
+    recorder.command = {"rslam", "record", "-o", recording.string(), "--robot", options.robot};
     if (!options.record_images) recorder.command.insert(recorder.command.end(), {"--exclude", "^(sim/camera|camera/image)$"});
     profile.processes.push_back(recorder);
   }
-  for (const auto& s : kServices) profile.processes.push_back({.name = s});
-  profile.processes.push_back({.name = "sim"});
+  for (const std::string& name : kServices) profile.processes.emplace_back().name = name;
+  profile.processes.emplace_back().name = "sim";
   launch::LaunchOptions launch_options{.bin_dir = bin_dir,
                                        .robot = options.robot,
                                        .dds = dds,

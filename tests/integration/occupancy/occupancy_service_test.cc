@@ -184,14 +184,15 @@ TEST_F(OccupancyServiceTest, ProfileOfEachFrameShowsTheWallAtItsDistance) {
     EXPECT_EQ(profile->header.robot_id, "robot1");
     EXPECT_EQ(profile->header.stamp_ns, static_cast<int64_t>(seq) * 100'000'000);
     EXPECT_EQ(profile->experience_id, 1u);
-    ASSERT_FALSE(profile->ranges_m.empty());
+    ASSERT_FALSE(profile->bins.empty());
     // The bin looking straight ahead.
     size_t ahead = 0;
-    for (size_t i = 0; i < profile->ranges_m.size(); ++i)
+    for (size_t i = 0; i < profile->bins.size(); ++i)
       if (std::abs(profile->bearing_min_rad + i * profile->bearing_step_rad) <
           std::abs(profile->bearing_min_rad + ahead * profile->bearing_step_rad))
         ahead = i;
-    EXPECT_NEAR(profile->ranges_m[ahead], kWallX, 0.05);
+    EXPECT_EQ(profile->bins[ahead].status, msg::ProfileBinStatus::PROFILE_BIN_OBSTACLE);
+    EXPECT_NEAR(profile->bins[ahead].range_m, kWallX, 0.05);
   }
 }
 
@@ -285,7 +286,7 @@ TEST_F(OccupancyServiceTest, AcceptsMonoImages) {
       5s))
       << service->Output();
   EXPECT_EQ(profile->header.frame_seq, 1u);
-  EXPECT_FALSE(profile->ranges_m.empty());
+  EXPECT_FALSE(profile->bins.empty());
 }
 
 TEST_F(OccupancyServiceTest, MalformedInputIsCountedAndTheServiceKeepsWorking) {
@@ -374,7 +375,7 @@ TEST_F(OccupancyServiceTest, RestartAfterSigkillReloadsTheLastSavedStateAndConti
   // And it goes on mapping.
   const auto profile = SendFrame(11);
   ASSERT_TRUE(profile) << restarted->Output();
-  EXPECT_NEAR(profile->ranges_m[profile->ranges_m.size() / 2], kWallX, 0.1);
+  EXPECT_NEAR(profile->bins[profile->bins.size() / 2].range_m, kWallX, 0.1);
 }
 
 TEST_F(OccupancyServiceTest, CorruptStateFileIsRefusedWithExitOne) {

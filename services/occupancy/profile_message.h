@@ -1,0 +1,19 @@
+#pragma once
+// The occupancy/profile message of a Radial Obstacle Profile and back, bin for bin: a consumer
+// (a tool rebuilding the grid from a recording, another mapper) inserts exactly what the service
+// inserted. Used by the service and its tests.
+
+#include "rslam/msg/all_messages.h"
+#include "services/occupancy/anchored_profile_map.h"
+
+namespace rslam::occupancy {
+
+// The profile anchored to its experience; max_range_m is the sensor model's reliable range (the
+// grid trusts no range beyond it; bins may reach farther).
+msg::ObstacleProfile ProfileToMessage(const msg::Header& header, const AnchoredProfile& anchored, float max_range_m);
+
+// The profile of a message. Throws std::invalid_argument naming the problem (non-finite or
+// non-positive bearing step or reliable range, an unknown status, a negative or non-finite range).
+RadialObstacleProfile ProfileFromMessage(const msg::ObstacleProfile& message);
+
+}  // namespace rslam::occupancy
