@@ -244,7 +244,7 @@ class OccupancyNode::Mapper {
     last_header_ = pose.header;
     context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
     profile_pub_->Publish(ProfileToMessage(pose.header, kept ? map_.profiles().back() : anchored,
-                                    static_cast<float>(config_.sensor.reliable_range_m)));
+                                           static_cast<float>(config_.sensor.reliable_range_m)));
     if (frames_since_rebuild_ < std::numeric_limits<int>::max() / 2) ++frames_since_rebuild_;
     if (pending_correction_ && frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames)
       ApplyPendingCorrection();  // the rebuild publishes the grid when it is done
