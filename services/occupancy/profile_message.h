@@ -1,7 +1,8 @@
 #pragma once
 // The occupancy/profile message of a Radial Obstacle Profile and back, bin for bin: a consumer
 // (a tool rebuilding the grid from a recording, another mapper) inserts exactly what the service
-// inserted. Used by the service and its tests.
+// inserted. The service publishes with ProfileToMessage; no service reads the topic today, so
+// ProfileFromMessage is for such consumers (its test shows their grid is the service's).
 
 #include "rslam/msg/all_messages.h"
 #include "services/occupancy/anchored_profile_map.h"
