@@ -69,6 +69,13 @@ std::vector<std::pair<int, int>> EscapePath(const CoarseGrid& cs, const std::vec
   return {};
 }
 
+// Calls f(x, y) for each of the k x k finer cells that make up cell (x, y) of a grid k times coarser.
+template <class F>
+void ForEachFinerCell(int x, int y, int k, F f) {
+  for (int dy = 0; dy < k; ++dy)
+    for (int dx = 0; dx < k; ++dx) f(x * k + dx, y * k + dy);
+}
+
 }  // namespace
 
 ExplorationPlanner::ExplorationPlanner(ExplorerConfig config) : config_(std::move(config)) {
@@ -94,12 +101,10 @@ void ExplorationPlanner::StartFinishing() {
   const int k = FinerPerCoarse();
   std::vector<SetAsideGoal> set_aside;
   for (const SetAsideGoal& g : set_aside_)
-    for (int dy = 0; dy < k; ++dy)
-      for (int dx = 0; dx < k; ++dx) set_aside.push_back({g.x * k + dx, g.y * k + dy, g.reason, g.blocked});
+    ForEachFinerCell(g.x, g.y, k, [&](int x, int y) { set_aside.push_back({x, y, g.reason, g.blocked}); });
   std::map<std::pair<int, int>, int> blocked;
   for (const auto& [cell, attempts] : blocked_attempts_)
-    for (int dy = 0; dy < k; ++dy)
-      for (int dx = 0; dx < k; ++dx) blocked[{cell.first * k + dx, cell.second * k + dy}] = attempts;
+    ForEachFinerCell(cell.first, cell.second, k, [&](int x, int y) { blocked[{x, y}] = attempts; });
   set_aside_ = std::move(set_aside);
   blocked_attempts_ = std::move(blocked);
   finishing_ = true;
@@ -117,14 +122,12 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
   // each is mostly the same, and one by one a cluster of small goals behind a gap too narrow for
   // the robot took a demo run's last 100 s.
   const int k = finishing_ ? FinerPerCoarse() : 1;
-  const int x0 = plan.goal_x / k * k, y0 = plan.goal_y / k * k;
-  for (int y = y0; y < y0 + k; ++y)
-    for (int x = x0; x < x0 + k; ++x)
-      if (++blocked_attempts_[{x, y}] % config_.max_blocked_attempts == 0)
-        SetAside(x, y,
-                 "look before you move found the way blocked " + std::to_string(config_.max_blocked_attempts) +
-                     " times",
-                 true);
+  ForEachFinerCell(plan.goal_x / k, plan.goal_y / k, k, [&](int x, int y) {
+    if (++blocked_attempts_[{x, y}] % config_.max_blocked_attempts == 0)
+      SetAside(x, y,
+               "look before you move found the way blocked " + std::to_string(config_.max_blocked_attempts) + " times",
+               true);
+  });
 }
 
 void ExplorationPlanner::ReportBump(const Plan& plan, const Pose2D& at, bool backwards) {

@@ -14,7 +14,8 @@ namespace rslam::occupancy {
 msg::ObstacleProfile ProfileToMessage(const msg::Header& header, const AnchoredProfile& anchored, float max_range_m);
 
 // The profile of a message. Throws std::invalid_argument naming the problem (non-finite or
-// non-positive bearing step or reliable range, an unknown status, a negative or non-finite range).
+// non-positive bearing step or reliable range, a negative or non-finite range, an unknown status:
+// the bus's decoder already refuses one on the wire, a message built in process may hold one).
 RadialObstacleProfile ProfileFromMessage(const msg::ObstacleProfile& message);
 
 }  // namespace rslam::occupancy
