@@ -78,6 +78,17 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   EXPECT_LE(summary["grid"]["at_start_pose"]["coverage"].get<double>(), 1.0);
   EXPECT_LE(summary["grid"]["at_start_pose"]["map_precision"].get<double>(), 1.0);
   EXPECT_TRUE(summary["grid_placement"]["theta_rad"].is_number());
+  // Where coverage and precision are lost: every reachable cell is covered or missed one way, every
+  // marked cell agrees or is wrong one way.
+  const nlohmann::json& grid = summary["grid"];
+  EXPECT_EQ(grid["covered_cells"].get<int64_t>() + grid["missed_cells"]["unknown"].get<int64_t>() +
+                grid["missed_cells"]["uncertain"].get<int64_t>() + grid["missed_cells"]["occupied"].get<int64_t>(),
+            grid["reachable_cells"].get<int64_t>())
+      << summary.dump(2);
+  EXPECT_EQ(grid["agreeing_cells"].get<int64_t>() + grid["wrong_cells"]["free"].get<int64_t>() +
+                grid["wrong_cells"]["occupied"].get<int64_t>(),
+            grid["marked_cells"].get<int64_t>())
+      << summary.dump(2);
   // The start pose places the map frame turned by the experience map's initial facing (the demo
   // keeps OpenRatSLAM's 90 degrees; until session 16 it was left out, a quarter turn off) ...
   const std::vector<double> start = summary["start_pose"].get<std::vector<double>>();

@@ -99,6 +99,20 @@ std::string Metres(std::optional<double> v) {
   return s.str();
 }
 
+// Where the grid loses coverage and precision, as shares of the reachable and of the marked cells;
+// empty without a grid.
+std::string GridLosses(const std::optional<GridComparison>& g) {
+  if (!g) return "";
+  const auto share = [](uint64_t part, uint64_t whole) {
+    return Percent(whole == 0 ? std::nullopt : std::optional(static_cast<double>(part) / whole));
+  };
+  return "  not covered:    " + share(g->missed_unknown_cells, g->reachable_cells) + " unknown, " +
+         share(g->missed_uncertain_cells, g->reachable_cells) + " uncertain, " +
+         share(g->missed_occupied_cells, g->reachable_cells) + " occupied (of the reachable cells)\n" +
+         "  not agreeing:   " + share(g->wrong_free_cells, g->marked_cells) + " free where the world is wall, " +
+         share(g->wrong_occupied_cells, g->marked_cells) + " occupied where it is free (of the marked cells)\n";
+}
+
 // Per frame: ground truth (world), experience-map pose (map frame), odometry and its dead
 // reckoning, for plotting and for calibrating the odometry against the truth.
 void WriteTrajectoriesCsv(const DemoObservations& seen, const std::vector<FramePose>& dead_reckoning,
@@ -350,6 +364,11 @@ int RunDemo(const DemoOptions& options) {
                        {"covered_cells", grid_check->covered_cells},
                        {"marked_cells", grid_check->marked_cells},
                        {"agreeing_cells", grid_check->agreeing_cells},
+                       {"missed_cells", {{"unknown", grid_check->missed_unknown_cells},
+                                         {"uncertain", grid_check->missed_uncertain_cells},
+                                         {"occupied", grid_check->missed_occupied_cells}}},
+                       {"wrong_cells", {{"free", grid_check->wrong_free_cells},
+                                        {"occupied", grid_check->wrong_occupied_cells}}},
                        {"tolerance_m", world.resolution()},
                        {"placed_by", map_to_world ? "rigid fit of the experiences to ground truth" : "start pose"},
                        {"at_start_pose", {{"coverage", grid_at_start->coverage},
@@ -385,6 +404,7 @@ int RunDemo(const DemoOptions& options) {
          << "  of the free cells the robot's footprint can reach from the start\n"
          << "map precision       " << Percent(grid_check ? std::optional(grid_check->precision) : std::nullopt)
          << "  of the grid's free/occupied cells agree with the world (within one world cell)\n"
+         << GridLosses(grid_check)
          << "templates           " << seen.template_count << "\n"
          << "experiences         " << experiences << ", links " << loops.links << ", loop closures "
          << loops.loop_closures << "\n"

@@ -59,7 +59,14 @@ GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const 
   out.reachable_cells = reachable.size();
   for (const auto& cell : reachable) {
     const int v = GridValueAt(grid, WorldToMap(map_origin, world.CellCenter(cell)));
-    out.covered_cells += v >= 0 && v <= kFreeAtMost;
+    if (v < 0)
+      ++out.missed_unknown_cells;
+    else if (v <= kFreeAtMost)
+      ++out.covered_cells;
+    else if (v < kOccupiedAtLeast)
+      ++out.missed_uncertain_cells;
+    else
+      ++out.missed_occupied_cells;
   }
   out.coverage = reachable.empty() ? 0.0 : static_cast<double>(out.covered_cells) / reachable.size();
 
@@ -84,6 +91,7 @@ GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const 
           agrees = free ? world.Classify(c) == sim::CellClass::kFree : world.IsWall(c);
         }
       out.agreeing_cells += agrees;
+      if (!agrees) ++(free ? out.wrong_free_cells : out.wrong_occupied_cells);
     }
   }
   out.precision = out.marked_cells == 0 ? 0.0 : static_cast<double>(out.agreeing_cells) / out.marked_cells;

@@ -47,8 +47,18 @@ struct GridComparison {
   double precision = 0.0;
   uint64_t reachable_cells = 0;  // world cells the robot's footprint can reach
   uint64_t covered_cells = 0;    // ... that the grid marks free
+  // The reachable cells not covered, by what the grid says there: unknown (or outside the grid:
+  // never seen, or a wall the map put short of where it is), between the free and occupied
+  // thresholds, occupied.
+  uint64_t missed_unknown_cells = 0;
+  uint64_t missed_uncertain_cells = 0;
+  uint64_t missed_occupied_cells = 0;
   uint64_t marked_cells = 0;     // grid cells marked free or occupied
   uint64_t agreeing_cells = 0;   // ... that agree with the world
+  // The marked cells that disagree: free with no free world cell within the tolerance (where a
+  // planner would drive into a wall), occupied with no wall within it.
+  uint64_t wrong_free_cells = 0;
+  uint64_t wrong_occupied_cells = 0;
 };
 
 // The world cells (sorted, iy then ix) the robot's disc can cover when its centre moves from the

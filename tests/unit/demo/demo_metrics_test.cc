@@ -1,5 +1,6 @@
-// The demo's figures of merit (tools/demo/demo_metrics.h): placing a map in the world, and the
-// final map's trajectory error.
+// The demo's figures of merit (tools/demo/demo_metrics.h): the grid against the world (coverage,
+// precision and where each is lost), placing a map in the world, and the final map's trajectory
+// error.
 
 #include "tools/demo/demo_metrics.h"
 
@@ -19,6 +20,75 @@ msg::Experience At(uint32_t id, double x, double y) {
   e.x_m = x;
   e.y_m = y;
   return e;
+}
+
+// A 1.2 m square room at 0.1 m cells: walls two cells thick, 8 x 8 free cells inside.
+sim::WorldMap SquareRoom() {
+  std::vector<sim::CellClass> cells(12 * 12, sim::CellClass::kOccupied);
+  for (int iy = 2; iy < 10; ++iy)
+    for (int ix = 2; ix < 10; ++ix) cells[iy * 12 + ix] = sim::CellClass::kFree;
+  return sim::WorldMap(12, 12, 0.1, {0.0, 0.0}, std::move(cells));
+}
+
+// The room as a grid would map it, in a map frame whose origin lies at `map_origin` in the
+// world (translation only), with a few cells changed.
+msg::OccupancyGrid RoomGrid(const sim::WorldMap& world, const Eigen::Vector2d& map_origin,
+                            const std::map<std::pair<int, int>, int8_t>& changed) {
+  msg::OccupancyGrid grid{};
+  grid.width = grid.height = 12;
+  grid.resolution_m = 0.1f;
+  grid.origin_x_m = -map_origin.x();
+  grid.origin_y_m = -map_origin.y();
+  for (int iy = 0; iy < 12; ++iy)
+    for (int ix = 0; ix < 12; ++ix) {
+      const auto it = changed.find({ix, iy});
+      grid.cells.push_back(it != changed.end() ? it->second
+                           : world.Classify({ix, iy}) == sim::CellClass::kFree ? int8_t{0}
+                                                                                : int8_t{100});
+    }
+  return grid;
+}
+
+TEST(DemoMetricsTest, CompareGridWithWorldCountsWhereCoverageAndPrecisionAreLost) {
+  const sim::WorldMap world = SquareRoom();
+  const Pose2D start{0.55, 0.55, 0.0};
+  const std::vector<Eigen::Vector2i> reachable = ReachableFootprint(world, start, 0.0);
+  ASSERT_EQ(reachable.size(), 64u);
+  const std::map<std::pair<int, int>, int8_t> changed = {
+      {{3, 3}, -1}, {{3, 4}, -1},  // never seen
+      {{6, 6}, 50},                // between the thresholds
+      {{5, 5}, 100},               // occupied, a cell from any wall: missed and wrong
+      {{0, 6}, 0},                 // free inside the wall, no floor within a cell: wrong
+      {{2, 6}, 100},               // occupied next to the wall: missed, but within the tolerance
+  };
+  // The same grid placed by the map origin, wherever the map frame starts.
+  for (const Eigen::Vector2d& origin : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.6, 0.6)}) {
+    SCOPED_TRACE(origin.transpose());
+    const GridComparison c = CompareGridWithWorld(world, reachable, {origin.x(), origin.y(), 0.0},
+                                                  RoomGrid(world, origin, changed), world.resolution());
+    EXPECT_EQ(c.reachable_cells, 64u);
+    EXPECT_EQ(c.covered_cells, 59u);
+    EXPECT_EQ(c.missed_unknown_cells, 2u);
+    EXPECT_EQ(c.missed_uncertain_cells, 1u);
+    EXPECT_EQ(c.missed_occupied_cells, 2u);
+    EXPECT_DOUBLE_EQ(c.coverage, 59.0 / 64.0);
+    EXPECT_EQ(c.marked_cells, 144u - 3u);
+    EXPECT_EQ(c.wrong_free_cells, 1u);
+    EXPECT_EQ(c.wrong_occupied_cells, 1u);
+    EXPECT_EQ(c.agreeing_cells, 141u - 2u);
+    EXPECT_DOUBLE_EQ(c.precision, 139.0 / 141.0);
+  }
+}
+
+TEST(DemoMetricsTest, CompareGridWithWorldCountsTheWorldOutsideTheGridAsUnknown) {
+  const sim::WorldMap world = SquareRoom();
+  const std::vector<Eigen::Vector2i> reachable = ReachableFootprint(world, {0.55, 0.55, 0.0}, 0.0);
+  // The map frame half a metre to the right of the grid's world: the room's three left columns of
+  // floor fall outside the grid.
+  const GridComparison c = CompareGridWithWorld(world, reachable, {0.5, 0.0, 0.0},
+                                                RoomGrid(world, {0.0, 0.0}, {}), world.resolution());
+  EXPECT_EQ(c.missed_unknown_cells, 3u * 8u);
+  EXPECT_EQ(c.covered_cells + c.missed_unknown_cells + c.missed_uncertain_cells + c.missed_occupied_cells, 64u);
 }
 
 TEST(DemoMetricsTest, FitMapToWorldRecoversATurnedAndShiftedMap) {
