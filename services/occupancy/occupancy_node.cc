@@ -240,7 +240,9 @@ class OccupancyNode::Mapper {
       context_.Reject("frame", e.what());
       return;
     }
-    latest_map_version_ = std::max(latest_map_version_, pose.map_version);
+    // A pose's version says nothing of the older profiles' anchors once snapshots come: they are
+    // at the last correction applied until the next one is.
+    if (!rebuilt_version_) latest_map_version_ = std::max(latest_map_version_, pose.map_version);
     last_header_ = pose.header;
     context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
     profile_pub_->Publish(ProfileToMessage(pose.header, kept ? map_.profiles().back() : anchored,
@@ -327,7 +329,9 @@ class OccupancyNode::Mapper {
   AnchoredProfileMap map_;
   FrameJoiner<msg::Image, msg::ExperiencePose> joiner_;
   uint64_t reported_dropped_ = 0;
-  uint64_t latest_map_version_ = 0;  // newest experience-map version the grid reflects
+  // The experience-map version the grid reflects: the newest snapshot applied (rebuilt, or found to
+  // move no anchor); before the first snapshot, the newest pose's.
+  uint64_t latest_map_version_ = 0;
   std::optional<uint64_t> rebuilt_version_;
   struct PendingCorrection {
     uint64_t map_version = 0;

@@ -6,7 +6,8 @@
 //      experience_map/map    (msg::ExperienceMap snapshot: corrected experience poses)
 // Out: occupancy/profile     (msg::ObstacleProfile per joined frame, the frame's header)
 //      occupancy/grid        (msg::OccupancyGrid every grid_publish_every_n_frames frames and
-//                             after every rebuild; map_version = experience map version used)
+//                             after every rebuild; map_version = the experience map version
+//                             whose poses the grid stands on: the newest snapshot applied)
 //
 // Image and pose are joined by header.frame_seq. Each joined frame gives one Radial Obstacle
 // Profile, anchored to the current experience and inserted into the grid. When a map snapshot

@@ -122,10 +122,11 @@ class OccupancyServiceTest : public ::testing::Test {
     return pose;
   }
 
-  // Publishes the frame (pose first or image first) and waits for its profile.
-  std::optional<msg::ObstacleProfile> SendFrame(uint64_t seq, bool pose_first = true) {
+  // Publishes the frame (pose first or image first; the pose from that map version) and waits for
+  // its profile.
+  std::optional<msg::ObstacleProfile> SendFrame(uint64_t seq, bool pose_first = true, uint64_t map_version = 1) {
     const msg::Image image = Frame(seq, Pose2D{0, 0, 0});
-    const msg::ExperiencePose pose = Pose(seq, 0, 0, 0);
+    const msg::ExperiencePose pose = Pose(seq, 0, 0, 0, 1, map_version);
     if (pose_first) {
       pose_pub_->Publish(pose);
       image_pub_->Publish(image);
@@ -251,12 +252,13 @@ TEST_F(OccupancyServiceTest, WhileTheMapKeepsCorrectingItRebuildsAtMostEveryNFra
   map_pub_->Publish(correction(3, 0.0));  // the next one waits for 5 frames since the rebuild
   ASSERT_TRUE(map_pub_->WaitForAcknowledgments(5s));
   for (uint64_t seq = 11; seq <= 13; ++seq) {
-    ASSERT_TRUE(SendFrame(seq)) << service->Output();
+    // The poses come from the corrected map already; the grid is not on it until it is rebuilt.
+    ASSERT_TRUE(SendFrame(seq, /*pose_first=*/true, /*map_version=*/3)) << service->Output();
     const auto grid = AwaitGrid([seq](const msg::OccupancyGrid& g) { return g.header.frame_seq == seq; });
     ASSERT_TRUE(grid) << service->Output();
-    EXPECT_EQ(grid->map_version, 2u) << "rebuilt again after " << seq - 10 << " frames";
+    EXPECT_EQ(grid->map_version, 2u) << "after " << seq - 10 << " frames: rebuilt again, or took the poses' version";
   }
-  for (uint64_t seq = 14; seq <= 15; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+  for (uint64_t seq = 14; seq <= 15; ++seq) ASSERT_TRUE(SendFrame(seq, true, 3)) << service->Output();
   const auto rebuilt = AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 3; });
   ASSERT_TRUE(rebuilt) << service->Output();
   EXPECT_EQ(rebuilt->header.frame_seq, 15u);
