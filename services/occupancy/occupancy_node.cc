@@ -68,7 +68,7 @@ class OccupancyNode::Mapper {
       // A restarted mapper shows its restored grid at once (state QoS: late joiners get it too).
       std::lock_guard lock(mutex_);
       last_header_.robot_id = context_.robot_id();
-      PublishGrid(last_header_, latest_map_version_);
+      PublishGrid(last_header_, grid_map_version_);
     }
   }
 
@@ -164,7 +164,7 @@ class OccupancyNode::Mapper {
     pending_correction_.reset();
     rebuilt_version_ = correction.map_version;
     if (!AnchorsMoved(correction.poses)) {
-      latest_map_version_ = std::max(latest_map_version_, correction.map_version);
+      grid_map_version_ = std::max(grid_map_version_, correction.map_version);
       return;
     }
     const auto lookup = [&correction](uint64_t id) -> std::optional<Pose2D> {
@@ -189,7 +189,7 @@ class OccupancyNode::Mapper {
       lock.lock();
       map_.Adopt(std::move(grid), job.plan);
       const uint64_t version = job.map_version;
-      latest_map_version_ = std::max(latest_map_version_, version);
+      grid_map_version_ = std::max(grid_map_version_, version);
       dirty_ = true;
       spdlog::info("map version {}: rebuilt the grid ({} of {} profiles moved)", version, job.plan.moved,
                    job.plan.placements.size());
@@ -242,7 +242,7 @@ class OccupancyNode::Mapper {
     }
     // A pose's version says nothing of the older profiles' anchors once snapshots come: they are
     // at the last correction applied until the next one is.
-    if (!rebuilt_version_) latest_map_version_ = std::max(latest_map_version_, pose.map_version);
+    if (!rebuilt_version_) grid_map_version_ = std::max(grid_map_version_, pose.map_version);
     last_header_ = pose.header;
     context_.SetLastFrame(pose.header.frame_seq, pose.header.stamp_ns);
     profile_pub_->Publish(ProfileToMessage(pose.header, kept ? map_.profiles().back() : anchored,
@@ -250,7 +250,7 @@ class OccupancyNode::Mapper {
     if (frames_since_rebuild_ < std::numeric_limits<int>::max() / 2) ++frames_since_rebuild_;
     if (pending_correction_ && frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames)
       ApplyPendingCorrection();  // the rebuild publishes the grid when it is done
-    if (++frames_since_grid_ >= config_.grid_publish_every_n_frames) PublishGrid(pose.header, latest_map_version_);
+    if (++frames_since_grid_ >= config_.grid_publish_every_n_frames) PublishGrid(pose.header, grid_map_version_);
   }
 
   void PublishGrid(const msg::Header& header, uint64_t map_version) {
@@ -331,7 +331,7 @@ class OccupancyNode::Mapper {
   uint64_t reported_dropped_ = 0;
   // The experience-map version the grid reflects: the newest snapshot applied (rebuilt, or found to
   // move no anchor); before the first snapshot, the newest pose's.
-  uint64_t latest_map_version_ = 0;
+  uint64_t grid_map_version_ = 0;
   std::optional<uint64_t> rebuilt_version_;
   struct PendingCorrection {
     uint64_t map_version = 0;
