@@ -227,8 +227,12 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       }
       pose_cells_current_.reset();
       driven_since_recognition_m_ = 0.0;
-      const Observation o = ObservedFromCurrent(a);
       const bool link_kind = a.kind == ExperienceAction::Kind::kLink;
+      ExperienceAction recognised = a;
+      if (!link_kind && !config_.exp_set_view_angle) {  // the angle at which nothing turns
+        recognised.relative_angle_rad = WrapAngle(accum_facing_ - experiences_[to].th_rad);
+      }
+      const Observation o = ObservedFromCurrent(recognised);
       bool changed = false;
       if (link_kind || config_.exp_average_repeated_links) {
         if (const int fwd = FindLink(current_, to); fwd >= 0) {
@@ -248,7 +252,7 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         if (!config_.exp_graph_optimisation) SeedLocalRegion(current_, to);
       }
       const Pose2D dead_reckoned = RobotPose();
-      SetCurrent(to, a);
+      SetCurrent(to, recognised);
       if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
         accum_facing_ = WrapAngle(dead_reckoned.theta +
                                   config_.exp_heading_correction * WrapAngle(accum_facing_ - dead_reckoned.theta));

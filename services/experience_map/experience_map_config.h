@@ -22,12 +22,20 @@ struct ExperienceMapConfig {
   // Average the observed transform into an existing link when the robot re-traverses it
   // (000 eq. 2). OpenRatSLAM keeps the first observation only (false).
   bool exp_average_repeated_links = true;
-  // On recognising an experience (link or set), the share of the difference between the dead-
+  // On recognising an experience (link, or set when exp_set_view_angle), the share of the difference between the dead-
   // reckoned heading and the recognised one (the experience's facing plus the view's offset) the
   // robot's heading takes: 1 = OpenRatSLAM (the recognised heading), 0 = keep dead reckoning.
   // A recognised heading is only as good as the view's shift match (about 1 degree a pixel) and
   // the experience's own facing; a blend keeps most of the drift correction and less noise.
   double exp_heading_correction = 1.0;
+  // A transition to an experience already linked to the current one (a set, not a new link) takes
+  // the view's offset angle as a recognition does (OpenRatSLAM: true), or takes its facing from
+  // the map (false: the robot's heading and the re-traversed link's facing stay as the odometry
+  // has them). Such a neighbour was mostly made a few frames before, its facing put there by the
+  // same odometry; driving past a wall, the view's offset to it is parallax more than turn, often
+  // the largest shift the template match searches, and at every set it turned the heading a
+  // little further (0.5 rad in 100 frames of driving straight in one demo run).
+  bool exp_set_view_angle = true;
   // On recognising an experience, the share of the way from the dead-reckoned position to the
   // experience's the robot's position takes; the rest stays as an offset from the experience
   // (it moves with the experience when the map is corrected). 1 = OpenRatSLAM (the robot is put
@@ -95,6 +103,8 @@ struct ExperienceMapConfig {
       "average re-traversals into the existing link (000 eq. 2)");
     v("exp_heading_correction", exp_heading_correction,
       "on recognition, the share of the heading difference taken from the experience (1 = OpenRatSLAM, 0 = none)");
+    v("exp_set_view_angle", exp_set_view_angle,
+      "a transition along an existing link (set) takes the view's offset angle (false: the map's facing)");
     v("exp_position_correction", exp_position_correction,
       "on recognition, the share of the way from the dead-reckoned position to the experience's (1 = OpenRatSLAM)");
     v("exp_graph_optimisation", exp_graph_optimisation, "least-squares correction of the whole map after loop closures");

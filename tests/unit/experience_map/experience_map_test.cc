@@ -166,6 +166,53 @@ TEST(ExperienceMap, RecognitionTakesTheConfiguredShareOfTheHeadingDifference) {
   EXPECT_NEAR(std::abs(HeadingAfterRecognising(0.5, 3.1, -3.1 - kPi / 2)), kPi, 1e-9);
 }
 
+// Driving straight past a wall, each experience made 0.1 m on from the last, the pose cells step
+// back to the one before and on again (sets), each view offset read as the same 0.065-rad shift:
+// parallax, not a turn. Returns the robot's heading after `steps` such steps and the largest
+// facing of any link.
+std::pair<double, double> HeadingAfterSetsAlongAWall(bool set_view_angle, int steps) {
+  ExperienceMapConfig config = NoCorrection();
+  config.exp_heading_correction = 0.3;
+  config.exp_set_view_angle = set_view_angle;
+  ExperienceMap map(config);
+  map.Apply(Create(0, kNoExperience));
+  for (uint32_t i = 0; i < static_cast<uint32_t>(steps); ++i) {
+    map.Integrate(0.1, 0.0, 1.0);
+    map.Apply(Create(i + 1, i));
+    for (const auto& [from, to] : {std::pair{i + 1, i}, std::pair{i, i + 1}}) {
+      ExperienceAction set = LinkTo(Kind::kSet, from, to);
+      set.relative_angle_rad = 0.065;
+      map.Apply(set);
+    }
+  }
+  double facing = 0.0;
+  for (const Link& l : map.links()) facing = std::max(facing, std::abs(l.facing_rad));
+  return {map.RobotPose().theta, facing};
+}
+
+TEST(ExperienceMap, ASetTakesTheViewAngleOnlyWhenConfigured) {
+  // OpenRatSLAM: every set turns the heading towards the view's 0.065 rad, each new experience
+  // is made facing the turned heading, and the re-traversed links' facings take the offset in.
+  const auto [turned, turned_link] = HeadingAfterSetsAlongAWall(true, 20);
+  EXPECT_GT(turned - kPi / 2, 0.5);
+  EXPECT_GT(turned_link, 0.01);
+  // Without, nothing turns: the heading and the links' facings stay as the odometry has them.
+  const auto [held, held_link] = HeadingAfterSetsAlongAWall(false, 20);
+  EXPECT_NEAR(held, kPi / 2, 1e-12);
+  EXPECT_NEAR(held_link, 0.0, 1e-12);
+  // A recognition that makes a new link still takes the view's angle.
+  ExperienceMapConfig config = NoCorrection();
+  config.exp_set_view_angle = false;
+  ExperienceMap map(config);
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(1, 0));
+  ExperienceAction back = LinkTo(Kind::kLink, 1, 0);
+  back.relative_angle_rad = 0.1;
+  map.Apply(back);
+  EXPECT_NEAR(map.RobotPose().theta, kPi / 2 + 0.1, 1e-12);
+}
+
 TEST(ExperienceMap, ALinkToARecognisedPlaceAgreesWithTheHeadingTheRecognitionGives) {
   // Experiences 0, 1 and 2, a metre apart going east, all face east. The robot turns 0.3 rad
   // left at 2 and recognises 0 (a teleport: positions aside) with its view turned 0.3 rad: it
