@@ -212,6 +212,8 @@ VisualOdometry::VisualOdometry(VisualOdometryConfig config) : config_(std::move(
 
 void VisualOdometry::Reset() {
   has_previous_ = false;
+  turning_shift_px_.reset();
+  turning_shift_before_px_.reset();
   image_size_ = cv::Size(0, 0);
 }
 
@@ -307,7 +309,14 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   if (config_.rotation_from_halves) {
     const size_t half = rotation_width / 2;
     const auto left = rotation_shift(0, half), right = rotation_shift(rotation_width - half, half);
-    const double shared = SharedShift(left.second, right.second);
+    double shared = SharedShift(left.second, right.second);
+    const double tolerance = config_.turn_continuity_px;
+    const bool steady_turn = turning_shift_px_ && turning_shift_before_px_ &&
+                             std::abs(*turning_shift_px_ - *turning_shift_before_px_) <= tolerance;
+    if (tolerance > 0 && steady_turn && std::abs(left.second - right.second) > tolerance) {
+      const double l = std::abs(left.second - *turning_shift_px_), r = std::abs(right.second - *turning_shift_px_);
+      if (std::min(l, r) <= tolerance) shared = l <= r ? left.second : right.second;
+    }
     rotation = {static_cast<int>(std::lround(shared)), shared};
   } else {
     rotation = rotation_shift(0, rotation_width);
@@ -326,8 +335,10 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   const double moving_difference = std::max(speed.difference - config_.vtrans_noise_floor, 0.0);
   velocity.vtrans =
       std::min(moving_difference * config_.vtrans_scaling / (config_.camera_hz * dt_s), config_.vtrans_max);
-  if (config_.turn_in_place_vrot_radps > 0 && std::abs(velocity.vrot) >= config_.turn_in_place_vrot_radps)
-    velocity.vtrans = 0.0;
+  const bool turning = config_.turn_in_place_vrot_radps > 0 && std::abs(velocity.vrot) >= config_.turn_in_place_vrot_radps;
+  if (turning) velocity.vtrans = 0.0;
+  turning_shift_before_px_ = turning_shift_px_;
+  turning_shift_px_ = turning ? std::optional<double>(rotation.second) : std::nullopt;
   return velocity;
 }
 

@@ -40,6 +40,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -102,6 +103,8 @@ class VisualOdometry {
   cv::Rect vtrans_crop_;
   cv::Rect vrot_crop_;
   bool has_previous_ = false;
+  // The rotation shifts of the last two frames while they were turns on the spot (turn_continuity_px).
+  std::optional<double> turning_shift_px_, turning_shift_before_px_;
   std::vector<float> vtrans_profile_, vtrans_previous_;
   std::vector<float> vrot_profile_, vrot_previous_;
   cv::Mat crop_grey_;  // a colour frame's crop converted to grey (reused from frame to frame)

@@ -48,6 +48,13 @@ struct VisualOdometryConfig {
   // zeroing the frame's speed as a turn on the spot). Turning while driving forward, the smaller
   // shift under-reads the turn by the nearer half's flow. Off: the whole crop (OpenRatSLAM).
   bool rotation_from_halves = false;
+  // With rotation_from_halves, in a steady turn on the spot (the last two frames at or above
+  // turn_in_place_vrot_radps, their shifts within this many pixels): halves that disagree by more
+  // than this are not a drive past a wall but one half mismatched (a plain or repeating stretch of
+  // wall), and the half whose shift is within this many pixels of the previous frame's is the
+  // turn. Such a frame read as no turn lost the whole frame's turn, and the floor registration
+  // seeded with it could read it as driving (0.36 rad lost in one turn of a demo run). 0 = off.
+  double turn_continuity_px = 0.0;
 
   template <class V>
   void VisitFields(V& v) {
@@ -75,6 +82,8 @@ struct VisualOdometryConfig {
       "refine the rotation shift below a pixel (OpenRatSLAM: whole pixels)");
     v("rotation_from_halves", rotation_from_halves,
       "rotation = the shift the rotation crop's two halves, matched apart, share (flow only one half shows is not a turn)");
+    v("turn_continuity_px", turn_continuity_px,
+      "in a steady turn on the spot, halves that disagree by more than this: the one within this many pixels of the previous frame's shift is the turn (0 = off)");
   }
 
   void Validate() const {
@@ -94,6 +103,7 @@ struct VisualOdometryConfig {
     Require(min_overlap_px >= 1, "min_overlap_px", "must be >= 1");
     Require(vtrans_noise_floor >= 0, "vtrans_noise_floor", "must be >= 0");
     Require(turn_in_place_vrot_radps >= 0, "turn_in_place_vrot_radps", "must be >= 0");
+    Require(turn_continuity_px >= 0, "turn_continuity_px", "must be >= 0");
   }
 };
 

@@ -131,6 +131,41 @@ TEST(VisualOdometryTest, SceneMovingRightIsCounterClockwiseRotationOfExpectedMag
   }
 }
 
+TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
+  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
+  const cv::Mat left = Texture(800, 480, 11), right = Texture(800, 480, 12);
+  // Each frame's left and right halves seen from their own offsets (a smaller one moves them right).
+  const auto frame = [&](int left_offset, int right_offset) {
+    cv::Mat out;
+    cv::hconcat(View(left, left_offset, 320), View(right, right_offset, 320), out);
+    return out;
+  };
+  // Turning on the spot 20 px a frame (0.29 rad/s); in the last frame the right half matches
+  // 10 px the other way (a stretch of wall that repeats), and the halves share no shift.
+  const auto last_turn = [&](double continuity_px, int turning_frames) {
+    VisualOdometryConfig config;
+    config.rotation_from_halves = true;
+    config.subpixel_rotation = true;
+    config.turn_in_place_vrot_radps = 0.12;
+    config.turn_continuity_px = continuity_px;
+    VisualOdometry vo(config);
+    int offset = 400;
+    vo.Update(frame(offset, offset), kDt);
+    for (int i = 0; i < turning_frames; ++i) {
+      offset -= 20;
+      const Velocity turning = vo.Update(frame(offset, offset), kDt);
+      EXPECT_NEAR(turning.vrot * kDt / rad_per_px, 20.0, 0.2);
+    }
+    return vo.Update(frame(offset - 20, offset + 10), kDt).vrot * kDt / rad_per_px;
+  };
+  EXPECT_NEAR(last_turn(0.0, 2), 0.0, 1e-9);   // off: the shared shift, none
+  EXPECT_NEAR(last_turn(3.0, 2), 20.0, 0.5);   // the half that goes on turning as before
+  EXPECT_NEAR(last_turn(3.0, 1), 0.0, 1e-9);   // one turning frame is not yet a steady turn
+  VisualOdometryConfig negative;
+  negative.turn_continuity_px = -1;
+  EXPECT_THROW(negative.Validate(), ConfigError);
+}
+
 TEST(VisualOdometryTest, SubpixelRotationRecoversAFractionalShift) {
   // The scene moved right by 12.4 px: the view of a 5x wider texture resampled at 1/5 pixel.
   const cv::Mat wide = Texture(5 * 760, 480, 3, 40);
