@@ -22,9 +22,10 @@ struct ExperienceMapConfig {
   // Average the observed transform into an existing link when the robot re-traverses it
   // (000 eq. 2). OpenRatSLAM keeps the first observation only (false).
   bool exp_average_repeated_links = true;
-  // On recognising an experience (link, or set when exp_set_view_angle), the share of the difference between the dead-
-  // reckoned heading and the recognised one (the experience's facing plus the view's offset) the
-  // robot's heading takes: 1 = OpenRatSLAM (the recognised heading), 0 = keep dead reckoning.
+  // On recognising an experience (a link, or a set with exp_set_view_angle), the share of the
+  // difference between the dead-reckoned heading and the recognised one (the experience's facing
+  // plus the view's offset) the robot's heading takes: 1 = OpenRatSLAM (the recognised heading),
+  // 0 = keep dead reckoning.
   // A recognised heading is only as good as the view's shift match (about 1 degree a pixel) and
   // the experience's own facing; a blend keeps most of the drift correction and less noise.
   double exp_heading_correction = 1.0;

@@ -143,9 +143,10 @@ TEST(ExperienceMap, RepeatedTransitionAveragesLinkByEq2) {
 
 // Experience 0 faces +y (90 degrees); the robot drives a loop whose dead reckoning comes back
 // facing `back_facing` and recognises experience 0 with the view turned `relative` rad.
-double HeadingAfterRecognising(double correction, double back_facing, double relative) {
+double HeadingAfterRecognising(double correction, double back_facing, double relative, bool set_view_angle = true) {
   ExperienceMapConfig config = NoCorrection();
   config.exp_heading_correction = correction;
+  config.exp_set_view_angle = set_view_angle;
   ExperienceMap map(config);
   map.Apply(Create(0, kNoExperience));
   map.Integrate(1.0, 0.0, 1.0);
@@ -201,16 +202,7 @@ TEST(ExperienceMap, ASetTakesTheViewAngleOnlyWhenConfigured) {
   EXPECT_NEAR(held, kPi / 2, 1e-12);
   EXPECT_NEAR(held_link, 0.0, 1e-12);
   // A recognition that makes a new link still takes the view's angle.
-  ExperienceMapConfig config = NoCorrection();
-  config.exp_set_view_angle = false;
-  ExperienceMap map(config);
-  map.Apply(Create(0, kNoExperience));
-  map.Integrate(1.0, 0.0, 1.0);
-  map.Apply(Create(1, 0));
-  ExperienceAction back = LinkTo(Kind::kLink, 1, 0);
-  back.relative_angle_rad = 0.1;
-  map.Apply(back);
-  EXPECT_NEAR(map.RobotPose().theta, kPi / 2 + 0.1, 1e-12);
+  EXPECT_NEAR(HeadingAfterRecognising(1.0, kPi / 2 + 0.3, 0.1, false), kPi / 2 + 0.1, 1e-12);
 }
 
 TEST(ExperienceMap, ALinkToARecognisedPlaceAgreesWithTheHeadingTheRecognitionGives) {
