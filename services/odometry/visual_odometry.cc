@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -26,6 +27,20 @@ namespace {
 double SharedShift(double left, double right) {
   if ((left > 0) != (right > 0) || left == 0 || right == 0) return 0.0;
   return std::abs(left) < std::abs(right) ? left : right;
+}
+
+// The turn the halves give: the shift they share, except in a steady turn on the spot (the last
+// two frames turns on the spot, `previous` and `before` within `tolerance` px of each other), where
+// halves more than `tolerance` apart give the one within `tolerance` of `previous`
+// (turn_continuity_px; 0 = always the shared shift).
+double HalvesShift(double left, double right, std::optional<double> previous, std::optional<double> before,
+                   double tolerance) {
+  const bool steady_turn = tolerance > 0 && previous && before && std::abs(*previous - *before) <= tolerance;
+  if (steady_turn && std::abs(left - right) > tolerance) {
+    const double l = std::abs(left - *previous), r = std::abs(right - *previous);
+    if (std::min(l, r) <= tolerance) return l <= r ? left : right;
+  }
+  return SharedShift(left, right);
 }
 
 // prefix[i] = sum of p[n] for n < i, in double: the sum over any overlap in O(1), to well under
@@ -309,14 +324,8 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   if (config_.rotation_from_halves) {
     const size_t half = rotation_width / 2;
     const auto left = rotation_shift(0, half), right = rotation_shift(rotation_width - half, half);
-    double shared = SharedShift(left.second, right.second);
-    const double tolerance = config_.turn_continuity_px;
-    const bool steady_turn = turning_shift_px_ && turning_shift_before_px_ &&
-                             std::abs(*turning_shift_px_ - *turning_shift_before_px_) <= tolerance;
-    if (tolerance > 0 && steady_turn && std::abs(left.second - right.second) > tolerance) {
-      const double l = std::abs(left.second - *turning_shift_px_), r = std::abs(right.second - *turning_shift_px_);
-      if (std::min(l, r) <= tolerance) shared = l <= r ? left.second : right.second;
-    }
+    const double shared = HalvesShift(left.second, right.second, turning_shift_px_, turning_shift_before_px_,
+                                      config_.turn_continuity_px);
     rotation = {static_cast<int>(std::lround(shared)), shared};
   } else {
     rotation = rotation_shift(0, rotation_width);
@@ -335,7 +344,8 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   const double moving_difference = std::max(speed.difference - config_.vtrans_noise_floor, 0.0);
   velocity.vtrans =
       std::min(moving_difference * config_.vtrans_scaling / (config_.camera_hz * dt_s), config_.vtrans_max);
-  const bool turning = config_.turn_in_place_vrot_radps > 0 && std::abs(velocity.vrot) >= config_.turn_in_place_vrot_radps;
+  const bool turning =
+      config_.turn_in_place_vrot_radps > 0 && std::abs(velocity.vrot) >= config_.turn_in_place_vrot_radps;
   if (turning) velocity.vtrans = 0.0;
   turning_shift_before_px_ = turning_shift_px_;
   turning_shift_px_ = turning ? std::optional<double>(rotation.second) : std::nullopt;

@@ -83,7 +83,7 @@ struct VisualOdometryConfig {
     v("rotation_from_halves", rotation_from_halves,
       "rotation = the shift the rotation crop's two halves, matched apart, share (flow only one half shows is not a turn)");
     v("turn_continuity_px", turn_continuity_px,
-      "in a steady turn on the spot, halves that disagree by more than this: the one within this many pixels of the previous frame's shift is the turn (0 = off)");
+      "steady turn on the spot, halves this many px apart: the one this near the last shift is the turn (0 = off)");
   }
 
   void Validate() const {
