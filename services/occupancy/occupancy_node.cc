@@ -19,6 +19,7 @@
 #include "services/occupancy/frame_joiner.h"
 #include "services/occupancy/grid_export.h"
 #include "services/occupancy/obstacle_profile_pipeline.h"
+#include "services/occupancy/profile_alignment.h"
 #include "services/occupancy/profile_message.h"
 
 namespace rslam::occupancy {
@@ -97,6 +98,8 @@ class OccupancyNode::Mapper {
       stopped_ = true;
     }
     StopRebuilds();
+    if (config_.profile_alignment.window_m > 0)
+      spdlog::info("{} of {} kept profiles were aligned with the grid", aligned_profiles_, map_.profiles().size());
     SaveState();
     ExportMaps();
   }
@@ -233,6 +236,12 @@ class OccupancyNode::Mapper {
       anchored.profile = pipeline_.ProfileFromImage(view);
       if (map_.IsNewView(pose.current_experience_id, anchored.offset, config_.profile_min_spacing_m,
                          config_.profile_min_turn_rad)) {
+        // Aligned only against a grid on the pose's own map (not one a newer correction will move).
+        if (pose.map_version <= grid_map_version_)
+          if (auto aligned = AlignProfile(map_.grid(), anchored.profile, robot, config_.profile_alignment)) {
+            anchored.offset = Between(experience, *aligned);
+            ++aligned_profiles_;
+          }
         map_.AddProfile(std::move(anchored));
         kept = dirty_ = true;
       }
@@ -329,6 +338,7 @@ class OccupancyNode::Mapper {
   AnchoredProfileMap map_;
   FrameJoiner<msg::Image, msg::ExperiencePose> joiner_;
   uint64_t reported_dropped_ = 0;
+  uint64_t aligned_profiles_ = 0;  // kept profiles moved by AlignProfile
   // The experience-map version the grid reflects: the newest snapshot applied (rebuilt, or found to
   // move no anchor); before the first snapshot, the newest pose's.
   uint64_t grid_map_version_ = 0;

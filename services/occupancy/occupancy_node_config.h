@@ -15,6 +15,7 @@
 #include "common/config/config_error.h"
 #include "services/occupancy/obstacle_profile_pipeline.h"
 #include "services/occupancy/occupancy_grid.h"
+#include "services/occupancy/profile_alignment.h"
 
 namespace rslam::occupancy {
 
@@ -61,6 +62,7 @@ struct OccupancyNodeConfig {
   int rebuild_at_most_every_n_frames = 10;  // a rebuild replays every profile: bound how often
   double profile_min_spacing_m = 0.0;  // a frame's profile joins the map only this far from the last
   double profile_min_turn_rad = 0.0;   // ... or turned this much (anchored_profile_map.h IsNewView)
+  ProfileAlignmentConfig profile_alignment;  // a misplaced profile is moved onto the grid (off by default)
   bool export_maps_on_shutdown = true;  // grid.pgm, grid.yaml, occupancy.png in the state dir
 
   template <class V>
@@ -80,6 +82,8 @@ struct OccupancyNodeConfig {
     v("profile_min_spacing_m", profile_min_spacing_m,
       "a frame's profile joins the map only if the robot moved this far from the last one's pose (m) ...");
     v("profile_min_turn_rad", profile_min_turn_rad, "... or turned this much (rad), or the experience changed");
+    v("profile_alignment", profile_alignment,
+      "a profile drawn where the grid has seen free floor is moved onto the grid's obstacles (profile_alignment.h)");
     v("export_maps_on_shutdown", export_maps_on_shutdown,
       "write grid.pgm, grid.yaml and occupancy.png into the state dir on shutdown");
   }
@@ -88,6 +92,7 @@ struct OccupancyNodeConfig {
     pipeline.Validate();  // keys of the pipeline are at the top of the section already
     ValidateNested(grid, "grid");
     ValidateNested(sensor, "sensor");
+    ValidateNested(profile_alignment, "profile_alignment");
     Require(grid_publish_every_n_frames >= 1, "grid_publish_every_n_frames", "must be >= 1");
     Require(join_buffer_frames >= 1 && join_buffer_frames <= 10000, "join_buffer_frames", "must be 1..10000");
     Require(rebuild_at_most_every_n_frames >= 0, "rebuild_at_most_every_n_frames", "must be >= 0");

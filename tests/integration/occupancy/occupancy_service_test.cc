@@ -122,11 +122,12 @@ class OccupancyServiceTest : public ::testing::Test {
     return pose;
   }
 
-  // Publishes the frame (pose first or image first; the pose from that map version) and waits for
-  // its profile.
-  std::optional<msg::ObstacleProfile> SendFrame(uint64_t seq, bool pose_first = true, uint64_t map_version = 1) {
+  // Publishes the frame taken at the origin (pose first or image first; the pose from that map
+  // version, which puts the robot at x = map_x) and waits for its profile.
+  std::optional<msg::ObstacleProfile> SendFrame(uint64_t seq, bool pose_first = true, uint64_t map_version = 1,
+                                                double map_x = 0.0) {
     const msg::Image image = Frame(seq, Pose2D{0, 0, 0});
-    const msg::ExperiencePose pose = Pose(seq, 0, 0, 0, 1, map_version);
+    const msg::ExperiencePose pose = Pose(seq, map_x, 0, 0, 1, map_version);
     if (pose_first) {
       pose_pub_->Publish(pose);
       image_pub_->Publish(image);
@@ -231,6 +232,31 @@ TEST_F(OccupancyServiceTest, CorrectedExperienceMovesTheOccupiedCells) {
   ASSERT_TRUE(moved) << service->Output();
   EXPECT_GE(MaxAlongX(*moved, kWallX + 0.5 - 0.1, kWallX + 0.5 + 0.1), 65) << "wall not at its corrected place";
   EXPECT_LE(MaxAlongX(*moved, kWallX - 0.1, kWallX + 0.1), 19) << "old wall position should now be free floor";
+}
+
+TEST_F(OccupancyServiceTest, AFrameTheMapPutsOffTheWallSeenBeforeIsAlignedWithIt) {
+  for (const bool align : {false, true}) {
+    std::vector<std::string> args;
+    if (align) args = {"--set", "occupancy.profile_alignment.window_m=0.3"};
+    auto service = Start(args);
+    for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+    // The robot is back where it was, but the map puts it 0.2 m short: the wall it sees would be
+    // drawn 0.2 m in front of the wall, on floor seen free ten times.
+    const auto off = SendFrame(11, true, 1, -0.2);
+    ASSERT_TRUE(off) << service->Output();
+    EXPECT_NEAR(off->offset_x_m, align ? 0.0 : -0.2, 0.03) << "aligned: " << align;
+    EXPECT_NEAR(off->offset_y_m, 0.0, 0.03);
+    // A pose from a newer map than the grid's: not aligned against a grid the correction will move.
+    const auto newer = SendFrame(12, true, 2, -0.2);
+    ASSERT_TRUE(newer) << service->Output();
+    EXPECT_NEAR(newer->offset_x_m, -0.2, 1e-6);
+    service->Signal(SIGTERM);
+    ASSERT_EQ(service->WaitExit(10s), 0) << service->Output();
+    if (align) {
+      EXPECT_NE(service->Output().find("1 of 12 kept profiles were aligned"), std::string::npos) << service->Output();
+    }
+    std::filesystem::remove(state_dir_.path() / "occupancy.pb");
+  }
 }
 
 TEST_F(OccupancyServiceTest, WhileTheMapKeepsCorrectingItRebuildsAtMostEveryNFrames) {

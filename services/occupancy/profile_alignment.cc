@@ -1,0 +1,109 @@
+#include "services/occupancy/profile_alignment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/imgproc.hpp>
+
+namespace rslam::occupancy {
+
+namespace {
+
+constexpr size_t kMinPoints = 10;       // fewer obstacle points do not pin a pose down
+constexpr double kAngleStepRad = 0.02;  // the search's turn step; its move step is half a cell
+// Ties go to the smaller correction: a candidate pays 0.1 points per (0.2 m)^2 and per (0.1 rad)^2.
+constexpr double kTieBreakPoints = 0.1;
+constexpr double kTieBreakM = 0.2;
+constexpr double kTieBreakRad = 0.1;
+
+}  // namespace
+
+std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstacleProfile& profile,
+                                   const Pose2D& pose, const ProfileAlignmentConfig& config) {
+  if (config.window_m <= 0) return std::nullopt;
+  const SensorModelConfig& sensor = grid.sensor_config();
+  const double range = std::min(config.match_range_m, sensor.reliable_range_m);
+  std::vector<Eigen::Vector2d> points;
+  profile.ObstaclePoints(points);
+  std::erase_if(points, [&](const Eigen::Vector2d& p) { return p.norm() > range; });
+  if (points.size() < kMinPoints) return std::nullopt;
+
+  // Occupied: more than one hit's evidence; seen free: more than two misses' net.
+  const double occupied = 1.01 * LogOddsFromProbability(sensor.hit_probability);
+  const double seen_free = 2.5 * LogOddsFromProbability(sensor.miss_probability);
+  const auto is_occupied = [&](CellIndex c) { return grid.Contains(c) && grid.LogOdds(c) > occupied; };
+
+  const double cos0 = std::cos(pose.theta), sin0 = std::sin(pose.theta);
+  size_t misplaced = 0;
+  for (const Eigen::Vector2d& p : points) {
+    const CellIndex c = grid.CellOf(pose.x + cos0 * p.x() - sin0 * p.y(), pose.y + sin0 * p.x() + cos0 * p.y());
+    if (!grid.Contains(c) || grid.LogOdds(c) >= seen_free) continue;
+    bool by_obstacle = false;
+    for (int dy = -1; dy <= 1 && !by_obstacle; ++dy)
+      for (int dx = -1; dx <= 1 && !by_obstacle; ++dx) by_obstacle = is_occupied({c.x + dx, c.y + dy});
+    if (!by_obstacle) ++misplaced;
+  }
+  if (static_cast<double>(misplaced) < config.min_misplaced_share * static_cast<double>(points.size()))
+    return std::nullopt;
+
+  // Likelihood field over the patch the search can reach: exp(-d^2 / 2) of the distance d (cells)
+  // to the nearest occupied cell.
+  const GridConfig& gc = grid.grid_config();
+  const double res = gc.resolution_m;
+  const CellIndex centre = grid.CellOf(pose.x, pose.y);
+  const int half = static_cast<int>(std::ceil((range + config.window_m) / res)) + 2;
+  const int side = 2 * half + 1, x0 = centre.x - half, y0 = centre.y - half;
+  cv::Mat free_of_obstacles(side, side, CV_8U, cv::Scalar(255));
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x)
+      if (is_occupied({x0 + x, y0 + y})) free_of_obstacles.at<uint8_t>(y, x) = 0;
+  cv::Mat field;
+  cv::distanceTransform(free_of_obstacles, field, cv::DIST_L2, cv::DIST_MASK_5);
+  field.forEach<float>([](float& d, const int*) { d = std::exp(-0.5f * d * d); });
+
+  const int steps_m = static_cast<int>(std::lround(config.window_m / (0.5 * res)));
+  const int steps_rad = static_cast<int>(std::lround(config.window_rad / kAngleStepRad));
+  const double step_rad = steps_rad > 0 ? config.window_rad / steps_rad : 0.0;
+  // The pose in patch cells (x0, y0 at 0).
+  const double px = (pose.x - gc.origin_x_m) / res - x0, py = (pose.y - gc.origin_y_m) / res - y0;
+  std::vector<Eigen::Vector2d> turned(points.size());
+  const auto turn = [&](double dtheta) {
+    const double c = std::cos(pose.theta + dtheta), s = std::sin(pose.theta + dtheta);
+    for (size_t i = 0; i < points.size(); ++i)
+      turned[i] = {px + (c * points[i].x() - s * points[i].y()) / res, py + (s * points[i].x() + c * points[i].y()) / res};
+  };
+  const auto score_at = [&](double dx, double dy) {  // of the turned points moved by (dx, dy) cells
+    double score = 0.0;
+    for (const Eigen::Vector2d& t : turned) {
+      const int cx = static_cast<int>(std::floor(t.x() + dx)), cy = static_cast<int>(std::floor(t.y() + dy));
+      if (cx >= 0 && cy >= 0 && cx < side && cy < side) score += field.at<float>(cy, cx);
+    }
+    return score;
+  };
+  turn(0.0);
+  const double nominal = score_at(0.0, 0.0);
+  double best = nominal;
+  std::optional<Pose2D> best_pose;
+  for (int a = -steps_rad; a <= steps_rad; ++a) {
+    const double dtheta = a * step_rad;
+    turn(dtheta);
+    for (int iy = -steps_m; iy <= steps_m; ++iy)
+      for (int ix = -steps_m; ix <= steps_m; ++ix) {
+        if (a == 0 && ix == 0 && iy == 0) continue;
+        const double dx = 0.5 * ix, dy = 0.5 * iy;  // cells
+        const double moved_m = std::hypot(dx, dy) * res;
+        const double score = score_at(dx, dy) - kTieBreakPoints * (moved_m * moved_m / (kTieBreakM * kTieBreakM) +
+                                                                   dtheta * dtheta / (kTieBreakRad * kTieBreakRad));
+        if (score > best) {
+          best = score;
+          best_pose = Pose2D{pose.x + dx * res, pose.y + dy * res, WrapAngle(pose.theta + dtheta)};
+        }
+      }
+  }
+  if (!best_pose || best - nominal < config.min_gain_points) return std::nullopt;
+  return best_pose;
+}
+
+}  // namespace rslam::occupancy

@@ -1,0 +1,118 @@
+#include "services/occupancy/profile_alignment.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "services/occupancy/occupancy_node_config.h"
+#include "tests/unit/occupancy/synthetic_scene.h"
+
+namespace rslam::occupancy {
+namespace {
+
+using testing::RayHitsSegment;
+using testing::Wall;
+
+// A room corner with a pillar in it: walls x = 2 and y = 1.5, and a 0.3 m square pillar at (1.2, 0.9)
+// that pins the pose down along both walls. Seen from around (0.5, 0).
+const std::vector<Wall> kScene = {
+    {{2.0, -2.0}, {2.0, 1.5}}, {{-2.0, 1.5}, {2.0, 1.5}},
+    {{1.05, 0.75}, {1.35, 0.75}}, {{1.35, 0.75}, {1.35, 1.05}}, {{1.35, 1.05}, {1.05, 1.05}}, {{1.05, 1.05}, {1.05, 0.75}}};
+
+// The 60-degree, 1-degree-bin profile a camera at `pose` takes of the scene (2 m scan range).
+RadialObstacleProfile ProfileAt(const Pose2D& pose, const std::vector<Wall>& scene = kScene) {
+  RadialObstacleProfile p;
+  p.bin_width_rad = M_PI / 180.0;
+  p.first_bearing_rad = -30 * p.bin_width_rad;
+  for (int i = 0; i < 60; ++i) {
+    const double bearing = pose.theta + p.BinCentre(i);
+    double range = 2.0;
+    for (const Wall& w : scene)
+      if (auto d = RayHitsSegment({pose.x, pose.y}, std::cos(bearing), std::sin(bearing), w)) range = std::min(range, *d);
+    p.bins.push_back(RopBin{static_cast<float>(range), 0.35f, range < 2.0 ? BinStatus::kObstacle : BinStatus::kFree});
+  }
+  return p;
+}
+
+OccupancyGrid SeenGrid() {
+  SensorModelConfig sensor;
+  sensor.reliable_range_m = 1.5;
+  OccupancyGrid grid(GridConfig{0.05, 200, 200, -5.0, -5.0}, sensor);
+  // The corner seen from a dozen poses, three times over.
+  for (int pass = 0; pass < 3; ++pass)
+    for (int i = 0; i < 12; ++i)
+      grid.InsertProfile(ProfileAt({0.3 + 0.05 * i, -0.2 + 0.04 * i, 0.3 + 0.08 * i}), {0.3 + 0.05 * i, -0.2 + 0.04 * i, 0.3 + 0.08 * i});
+  return grid;
+}
+
+ProfileAlignmentConfig On() {
+  ProfileAlignmentConfig c;
+  c.window_m = 0.3;
+  return c;
+}
+
+TEST(ProfileAlignmentTest, AProfileDrawnOffTheWallsSeenBeforeIsMovedBackOntoThem) {
+  const OccupancyGrid grid = SeenGrid();
+  const Pose2D truth{0.7, 0.1, 0.75};
+  const RadialObstacleProfile profile = ProfileAt(truth);
+  // The map puts the robot 0.2 m off and turned 0.05 rad: its walls would land on seen floor.
+  for (const Pose2D& error : {Pose2D{-0.15, -0.12, 0.05}, Pose2D{0.1, -0.17, -0.04}, Pose2D{-0.2, 0.05, 0.0}}) {
+    const Pose2D placed{truth.x + error.x, truth.y + error.y, truth.theta + error.theta};
+    const std::optional<Pose2D> aligned = AlignProfile(grid, profile, placed, On());
+    ASSERT_TRUE(aligned.has_value()) << error.x << " " << error.y;
+    EXPECT_LT(std::hypot(aligned->x - truth.x, aligned->y - truth.y), 0.05) << aligned->x << " " << aligned->y;
+    // Turns are found to the grid's grain: a cell (5 cm) at 1.1 m.
+    EXPECT_LT(std::abs(aligned->theta - truth.theta), 0.045) << aligned->theta;
+  }
+  // Off, or where it was taken, it stays.
+  EXPECT_FALSE(AlignProfile(grid, profile, {truth.x - 0.15, truth.y - 0.12, truth.theta}, ProfileAlignmentConfig{}));
+  EXPECT_FALSE(AlignProfile(grid, profile, truth, On()));
+  // Beyond the window it is not found.
+  ProfileAlignmentConfig narrow = On();
+  narrow.window_m = 0.05;
+  narrow.window_rad = 0.0;
+  const std::optional<Pose2D> near = AlignProfile(grid, profile, {truth.x - 0.2, truth.y, truth.theta}, narrow);
+  if (near) {
+    EXPECT_GT(std::abs(near->x - truth.x), 0.14);
+  }
+}
+
+TEST(ProfileAlignmentTest, AProfileOfAPlaceNotSeenBeforeIsNotMovedOntoOtherWalls) {
+  const OccupancyGrid grid = SeenGrid();
+  // Facing away from the corner at a wall the grid has not seen (x = -0.6): its points fall on
+  // unknown cells, however far off the map may have put it.
+  const std::vector<Wall> other = {{{-0.6, -2.0}, {-0.6, 2.0}}};
+  const Pose2D truth{0.6, 0.4, M_PI};
+  const RadialObstacleProfile profile = ProfileAt(truth, other);
+  EXPECT_FALSE(AlignProfile(grid, profile, truth, On()));
+  EXPECT_FALSE(AlignProfile(grid, profile, {truth.x + 0.2, truth.y, truth.theta}, On()));
+  // Too few obstacle points pin nothing down.
+  RadialObstacleProfile few = ProfileAt({0.7, 0.1, 0.75});
+  few.bins.resize(8);
+  EXPECT_FALSE(AlignProfile(grid, few, {0.55, 0.0, 0.8}, On()));
+}
+
+TEST(ProfileAlignmentTest, BadSettingsAreRefusedByName) {
+  for (const auto& [key, value] : std::vector<std::pair<std::string, double>>{
+           {"window_m", -0.1}, {"window_rad", 2.0}, {"match_range_m", 0.0}, {"min_misplaced_share", 0.0},
+           {"min_gain_points", -1.0}}) {
+    OccupancyNodeConfig config;
+    ProfileAlignmentConfig& a = config.profile_alignment;
+    if (key == "window_m") a.window_m = value;
+    if (key == "window_rad") a.window_rad = value;
+    if (key == "match_range_m") a.match_range_m = value;
+    if (key == "min_misplaced_share") a.min_misplaced_share = value;
+    if (key == "min_gain_points") a.min_gain_points = value;
+    try {
+      config.Validate();
+      ADD_FAILURE() << key << " = " << value << " was accepted";
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("profile_alignment." + key), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace rslam::occupancy
