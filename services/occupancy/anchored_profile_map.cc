@@ -1,5 +1,6 @@
 #include "services/occupancy/anchored_profile_map.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -8,13 +9,44 @@
 
 namespace rslam::occupancy {
 
-AnchoredProfileMap::AnchoredProfileMap(GridConfig grid, SensorModelConfig sensor)
-    : grid_(std::move(grid), std::move(sensor)) {}
+namespace {
+
+bool IsIdentity(const Pose2D& p) { return p.x == 0 && p.y == 0 && p.theta == 0; }
+
+// Where a profile is drawn: its placement, corrected.
+Pose2D Drawn(const Pose2D& placement, const ProfileCorrection& alignment) {
+  return IsIdentity(alignment.correction) ? placement : Compose(placement, alignment.correction);
+}
+
+// Aligns one profile against `grid` (the profiles before it). A placement within a quarter cell and
+// 0.01 rad of the one last searched from keeps its correction while the corrected placement still
+// fits; else the search runs again from the placement.
+void Align(const OccupancyGrid& grid, const RadialObstacleProfile& profile, const Pose2D& placement,
+           const ProfileAlignmentConfig& config, ProfileCorrection& alignment) {
+  if (config.window_m <= 0) {
+    alignment = {};
+    return;
+  }
+  if (const auto& from = alignment.searched_from) {
+    const bool same_place = std::hypot(from->x - placement.x, from->y - placement.y) < 0.25 * grid.grid_config().resolution_m &&
+                            std::abs(WrapAngle(from->theta - placement.theta)) < 0.01;
+    if (same_place && (IsIdentity(alignment.correction) ||
+                       !IsMisplaced(grid, profile, Compose(placement, alignment.correction), config)))
+      return;
+  }
+  const std::optional<Pose2D> found = AlignProfile(grid, profile, placement, config);
+  alignment = {found ? Between(placement, *found) : Pose2D{}, placement};
+}
+
+}  // namespace
+
+AnchoredProfileMap::AnchoredProfileMap(GridConfig grid, SensorModelConfig sensor, ProfileAlignmentConfig alignment)
+    : grid_(std::move(grid), std::move(sensor)), alignment_(alignment) {}
 
 void AnchoredProfileMap::AddProfile(AnchoredProfile anchored) {
   if (!IsFinite(anchored.experience_pose) || !IsFinite(anchored.offset))
     throw std::invalid_argument("experience pose or offset is not finite");
-  grid_.InsertProfile(anchored.profile, Compose(anchored.experience_pose, anchored.offset));
+  grid_.InsertProfile(anchored.profile, Drawn(Compose(anchored.experience_pose, anchored.offset), anchored.alignment));
   profiles_.push_back(std::move(anchored));
 }
 
@@ -22,7 +54,7 @@ void AnchoredProfileMap::AddProfile(uint64_t experience_id, const Pose2D& experi
                                     const Pose2D& robot_pose, RadialObstacleProfile profile) {
   if (!IsFinite(experience_pose) || !IsFinite(robot_pose))
     throw std::invalid_argument("experience or robot pose is not finite");
-  AddProfile({experience_id, Between(experience_pose, robot_pose), experience_pose, std::move(profile)});
+  AddProfile({experience_id, Between(experience_pose, robot_pose), experience_pose, std::move(profile), {}});
 }
 
 bool AnchoredProfileMap::IsNewView(uint64_t experience_id, const Pose2D& offset, double min_spacing_m,
@@ -34,13 +66,13 @@ bool AnchoredProfileMap::IsNewView(uint64_t experience_id, const Pose2D& offset,
 }
 
 size_t AnchoredProfileMap::Rebuild(const ExperiencePoseLookup& lookup) {
-  const RebuildPlan plan = PlanRebuild(lookup);
+  RebuildPlan plan = PlanRebuild(lookup);
   Adopt(Replay(plan), plan);
   return plan.moved;
 }
 
 AnchoredProfileMap::RebuildPlan AnchoredProfileMap::PlanRebuild(const ExperiencePoseLookup& lookup) {
-  RebuildPlan plan{grid_.grid_config(), grid_.sensor_config(), {}, 0};
+  RebuildPlan plan{grid_.grid_config(), grid_.sensor_config(), alignment_, {}, 0};
   plan.placements.reserve(profiles_.size());
   for (AnchoredProfile& p : profiles_) {
     if (const std::optional<Pose2D> pose = lookup(p.experience_id); pose && IsFinite(*pose)) {
@@ -49,21 +81,32 @@ AnchoredProfileMap::RebuildPlan AnchoredProfileMap::PlanRebuild(const Experience
         ++plan.moved;
       p.experience_pose = *pose;
     }
-    plan.placements.emplace_back(Compose(p.experience_pose, p.offset), &p.profile);
+    plan.placements.push_back({Compose(p.experience_pose, p.offset), &p.profile, p.alignment});
   }
   return plan;
 }
 
-OccupancyGrid AnchoredProfileMap::Replay(const RebuildPlan& plan) {
+OccupancyGrid AnchoredProfileMap::Replay(RebuildPlan& plan) {
   OccupancyGrid grid(plan.grid, plan.sensor);
-  for (const auto& [pose, profile] : plan.placements) grid.InsertProfile(*profile, pose);
+  for (Placement& p : plan.placements) {
+    Align(grid, *p.profile, p.pose, plan.alignment, p.alignment);
+    grid.InsertProfile(*p.profile, Drawn(p.pose, p.alignment));
+  }
   return grid;
 }
 
 void AnchoredProfileMap::Adopt(OccupancyGrid grid, const RebuildPlan& plan) {
+  for (size_t i = 0; i < plan.placements.size(); ++i) profiles_[i].alignment = plan.placements[i].alignment;
   for (size_t i = plan.placements.size(); i < profiles_.size(); ++i)
-    grid.InsertProfile(profiles_[i].profile, Compose(profiles_[i].experience_pose, profiles_[i].offset));
+    grid.InsertProfile(profiles_[i].profile,
+                       Drawn(Compose(profiles_[i].experience_pose, profiles_[i].offset), profiles_[i].alignment));
   grid_ = std::move(grid);
+}
+
+size_t AnchoredProfileMap::AlignedProfiles() const {
+  return static_cast<size_t>(std::count_if(profiles_.begin(), profiles_.end(), [](const AnchoredProfile& p) {
+    return !IsIdentity(p.alignment.correction);
+  }));
 }
 
 proto::OccupancyState AnchoredProfileMap::ToProto() const {

@@ -19,24 +19,36 @@
 #include <vector>
 
 #include "services/occupancy/occupancy_grid.h"
+#include "services/occupancy/profile_alignment.h"
 #include "common/math/pose2d.h"
 #include "services/occupancy/proto/occupancy_state.pb.h"
 #include "services/occupancy/radial_obstacle_profile.h"
 
 namespace rslam::occupancy {
 
+// Where a rebuild's alignment (profile_alignment.h) put a profile: drawn at experience_pose ⊕
+// offset ⊕ correction. A rebuild searches again only where the profile's own placement moved since
+// (searched_from), or where its corrected placement now falls on seen-free floor.
+struct ProfileCorrection {
+  Pose2D correction;                   // in the robot's frame; identity when not aligned
+  std::optional<Pose2D> searched_from; // experience_pose ⊕ offset when last looked at
+};
+
 struct AnchoredProfile {
   uint64_t experience_id = 0;
   Pose2D offset;           // robot in the experience's frame
   Pose2D experience_pose;  // the anchor pose last used to place this profile
   RadialObstacleProfile profile;
+  ProfileCorrection alignment;  // not saved: a restored map aligns again at its first rebuild
 };
 
 class AnchoredProfileMap {
  public:
   using ExperiencePoseLookup = std::function<std::optional<Pose2D>(uint64_t experience_id)>;
 
-  AnchoredProfileMap(GridConfig grid, SensorModelConfig sensor);
+  // With alignment.window_m > 0 every rebuild aligns each profile with the grid of the profiles
+  // before it (profile_alignment.h), all on the corrected map; new profiles join unaligned until then.
+  AnchoredProfileMap(GridConfig grid, SensorModelConfig sensor, ProfileAlignmentConfig alignment = {});
 
   // Keeps an anchored profile and inserts it into the grid at experience_pose ⊕ offset. Throws
   // std::invalid_argument on non-finite poses.
@@ -56,19 +68,29 @@ class AnchoredProfileMap {
   // not know keep their last pose. Returns the number of profiles whose anchor moved.
   size_t Rebuild(const ExperiencePoseLookup& lookup);
 
+  struct Placement {
+    Pose2D pose;  // experience_pose ⊕ offset
+    const RadialObstacleProfile* profile = nullptr;
+    ProfileCorrection alignment;  // the profile's, updated by Replay
+  };
   struct RebuildPlan {
     GridConfig grid;
     SensorModelConfig sensor;
-    std::vector<std::pair<Pose2D, const RadialObstacleProfile*>> placements;  // profiles [0, size)
+    ProfileAlignmentConfig alignment;
+    std::vector<Placement> placements;  // profiles [0, size)
     size_t moved = 0;  // profiles whose anchor moved
   };
   // Moves every anchor to lookup(id) (unknown experiences keep theirs) and plans the replay.
   RebuildPlan PlanRebuild(const ExperiencePoseLookup& lookup);
-  // The grid of the planned profiles alone. Reads only the plan and the profiles it points at, so
-  // it may run on another thread while this map takes new profiles.
-  static OccupancyGrid Replay(const RebuildPlan& plan);
-  // Takes `grid` (Replay of `plan`) as the map's grid, with the profiles kept since the plan added.
+  // The grid of the planned profiles alone, aligning them as it goes (their corrections are kept
+  // in the plan). Touches only the plan and reads the profiles it points at, so it may run on
+  // another thread while this map takes new profiles.
+  static OccupancyGrid Replay(RebuildPlan& plan);
+  // Takes `grid` (Replay of `plan`) as the map's grid and the plan's corrections, with the profiles
+  // kept since the plan added.
   void Adopt(OccupancyGrid grid, const RebuildPlan& plan);
+  // Profiles the last rebuild drew somewhere other than where the map put them.
+  size_t AlignedProfiles() const;
 
   const OccupancyGrid& grid() const { return grid_; }
   const std::deque<AnchoredProfile>& profiles() const { return profiles_; }
@@ -80,6 +102,7 @@ class AnchoredProfileMap {
 
  private:
   OccupancyGrid grid_;
+  ProfileAlignmentConfig alignment_;
   std::deque<AnchoredProfile> profiles_;
 };
 

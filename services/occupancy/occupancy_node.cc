@@ -19,7 +19,6 @@
 #include "services/occupancy/frame_joiner.h"
 #include "services/occupancy/grid_export.h"
 #include "services/occupancy/obstacle_profile_pipeline.h"
-#include "services/occupancy/profile_alignment.h"
 #include "services/occupancy/profile_message.h"
 
 namespace rslam::occupancy {
@@ -59,7 +58,7 @@ class OccupancyNode::Mapper {
       : context_(context),
         config_(config),
         pipeline_(config.pipeline),
-        map_(config.grid, config.sensor),
+        map_(config.grid, config.sensor, config.profile_alignment),
         joiner_(static_cast<size_t>(config.join_buffer_frames)),
         last_save_(std::chrono::steady_clock::now()) {
     LoadState();
@@ -99,7 +98,7 @@ class OccupancyNode::Mapper {
     }
     StopRebuilds();
     if (config_.profile_alignment.window_m > 0)
-      spdlog::info("{} of {} kept profiles were aligned with the grid", aligned_profiles_, map_.profiles().size());
+      spdlog::info("{} of {} kept profiles were aligned with the grid", map_.AlignedProfiles(), map_.profiles().size());
     SaveState();
     ExportMaps();
   }
@@ -186,7 +185,7 @@ class OccupancyNode::Mapper {
       rebuild_wake_.wait(lock, [this] { return planned_rebuild_ || stop_rebuilds_; });
       if (!planned_rebuild_) return;  // stopping, nothing planned
       // Nothing else writes the plan while it is set (ApplyPendingCorrection waits for the reset).
-      const PlannedRebuild& job = *planned_rebuild_;
+      PlannedRebuild& job = *planned_rebuild_;
       lock.unlock();
       OccupancyGrid grid = AnchoredProfileMap::Replay(job.plan);
       lock.lock();
@@ -230,18 +229,12 @@ class OccupancyNode::Mapper {
                        const_cast<uint8_t*>(image.data.data()), image.step);
     const Pose2D robot{pose.x_m, pose.y_m, pose.theta_rad};
     const Pose2D experience{pose.experience_x_m, pose.experience_y_m, pose.experience_theta_rad};
-    AnchoredProfile anchored{pose.current_experience_id, Between(experience, robot), experience, {}};
+    AnchoredProfile anchored{pose.current_experience_id, Between(experience, robot), experience, {}, {}};
     bool kept = false;  // the profile moved into the map; else `anchored` holds it, to publish
     try {
       anchored.profile = pipeline_.ProfileFromImage(view);
       if (map_.IsNewView(pose.current_experience_id, anchored.offset, config_.profile_min_spacing_m,
                          config_.profile_min_turn_rad)) {
-        // Aligned only against a grid on the pose's own map (not one a newer correction will move).
-        if (pose.map_version <= grid_map_version_)
-          if (auto aligned = AlignProfile(map_.grid(), anchored.profile, robot, config_.profile_alignment)) {
-            anchored.offset = Between(experience, *aligned);
-            ++aligned_profiles_;
-          }
         map_.AddProfile(std::move(anchored));
         kept = dirty_ = true;
       }
@@ -338,7 +331,6 @@ class OccupancyNode::Mapper {
   AnchoredProfileMap map_;
   FrameJoiner<msg::Image, msg::ExperiencePose> joiner_;
   uint64_t reported_dropped_ = 0;
-  uint64_t aligned_profiles_ = 0;  // kept profiles moved by AlignProfile
   // The experience-map version the grid reflects: the newest snapshot applied (rebuilt, or found to
   // move no anchor); before the first snapshot, the newest pose's.
   uint64_t grid_map_version_ = 0;

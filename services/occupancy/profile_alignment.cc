@@ -18,23 +18,27 @@ constexpr double kTieBreakPoints = 0.1;
 constexpr double kTieBreakM = 0.2;
 constexpr double kTieBreakRad = 0.1;
 
-}  // namespace
-
-std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstacleProfile& profile,
-                                   const Pose2D& pose, const ProfileAlignmentConfig& config) {
-  if (config.window_m <= 0) return std::nullopt;
-  const SensorModelConfig& sensor = grid.sensor_config();
-  const double range = std::min(config.match_range_m, sensor.reliable_range_m);
+// The obstacle points within the match range, in the robot's frame.
+std::vector<Eigen::Vector2d> MatchedPoints(const OccupancyGrid& grid, const RadialObstacleProfile& profile,
+                                           const ProfileAlignmentConfig& config) {
+  const double range = std::min(config.match_range_m, grid.sensor_config().reliable_range_m);
   std::vector<Eigen::Vector2d> points;
   profile.ObstaclePoints(points);
   std::erase_if(points, [&](const Eigen::Vector2d& p) { return p.norm() > range; });
-  if (points.size() < kMinPoints) return std::nullopt;
+  return points;
+}
 
-  // Occupied: more than one hit's evidence; seen free: more than two misses' net.
-  const double occupied = 1.01 * LogOddsFromProbability(sensor.hit_probability);
-  const double seen_free = 2.5 * LogOddsFromProbability(sensor.miss_probability);
-  const auto is_occupied = [&](CellIndex c) { return grid.Contains(c) && grid.LogOdds(c) > occupied; };
+// Occupied: more than one hit's evidence.
+double OccupiedLogOdds(const OccupancyGrid& grid) {
+  return 1.01 * LogOddsFromProbability(grid.sensor_config().hit_probability);
+}
 
+bool HasMisplacedShare(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points, const Pose2D& pose,
+                       const ProfileAlignmentConfig& config) {
+  if (points.size() < kMinPoints) return false;
+  // Seen free: more than two misses' evidence, net.
+  const double seen_free = 2.5 * LogOddsFromProbability(grid.sensor_config().miss_probability);
+  const double occupied = OccupiedLogOdds(grid);
   const double cos0 = std::cos(pose.theta), sin0 = std::sin(pose.theta);
   size_t misplaced = 0;
   for (const Eigen::Vector2d& p : points) {
@@ -42,11 +46,28 @@ std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstac
     if (!grid.Contains(c) || grid.LogOdds(c) >= seen_free) continue;
     bool by_obstacle = false;
     for (int dy = -1; dy <= 1 && !by_obstacle; ++dy)
-      for (int dx = -1; dx <= 1 && !by_obstacle; ++dx) by_obstacle = is_occupied({c.x + dx, c.y + dy});
+      for (int dx = -1; dx <= 1 && !by_obstacle; ++dx) {
+        const CellIndex n{c.x + dx, c.y + dy};
+        by_obstacle = grid.Contains(n) && grid.LogOdds(n) > occupied;
+      }
     if (!by_obstacle) ++misplaced;
   }
-  if (static_cast<double>(misplaced) < config.min_misplaced_share * static_cast<double>(points.size()))
-    return std::nullopt;
+  return static_cast<double>(misplaced) >= config.min_misplaced_share * static_cast<double>(points.size());
+}
+
+}  // namespace
+
+bool IsMisplaced(const OccupancyGrid& grid, const RadialObstacleProfile& profile, const Pose2D& pose,
+                 const ProfileAlignmentConfig& config) {
+  return HasMisplacedShare(grid, MatchedPoints(grid, profile, config), pose, config);
+}
+
+std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstacleProfile& profile,
+                                   const Pose2D& pose, const ProfileAlignmentConfig& config) {
+  if (config.window_m <= 0) return std::nullopt;
+  const std::vector<Eigen::Vector2d> points = MatchedPoints(grid, profile, config);
+  if (!HasMisplacedShare(grid, points, pose, config)) return std::nullopt;
+  const double range = std::min(config.match_range_m, grid.sensor_config().reliable_range_m);
 
   // Likelihood field over the patch the search can reach: exp(-d^2 / 2) of the distance d (cells)
   // to the nearest occupied cell.
@@ -55,10 +76,13 @@ std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstac
   const CellIndex centre = grid.CellOf(pose.x, pose.y);
   const int half = static_cast<int>(std::ceil((range + config.window_m) / res)) + 2;
   const int side = 2 * half + 1, x0 = centre.x - half, y0 = centre.y - half;
+  const double occupied = OccupiedLogOdds(grid);
   cv::Mat free_of_obstacles(side, side, CV_8U, cv::Scalar(255));
   for (int y = 0; y < side; ++y)
-    for (int x = 0; x < side; ++x)
-      if (is_occupied({x0 + x, y0 + y})) free_of_obstacles.at<uint8_t>(y, x) = 0;
+    for (int x = 0; x < side; ++x) {
+      const CellIndex c{x0 + x, y0 + y};
+      if (grid.Contains(c) && grid.LogOdds(c) > occupied) free_of_obstacles.at<uint8_t>(y, x) = 0;
+    }
   cv::Mat field;
   cv::distanceTransform(free_of_obstacles, field, cv::DIST_L2, cv::DIST_MASK_5);
   field.forEach<float>([](float& d, const int*) { d = std::exp(-0.5f * d * d); });

@@ -49,6 +49,11 @@ struct ProfileAlignmentConfig {
   }
 };
 
+// True when min_misplaced_share of the profile's obstacle points at `pose` lie on floor the grid has
+// seen free, away from any obstacle (and it has enough points to tell).
+bool IsMisplaced(const OccupancyGrid& grid, const RadialObstacleProfile& profile, const Pose2D& pose,
+                 const ProfileAlignmentConfig& config);
+
 // The pose at which `profile` agrees better with `grid`, or nullopt to keep `pose` (search off, too
 // few points, too few misplaced, or nothing better by min_gain_points).
 std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstacleProfile& profile,

@@ -121,7 +121,7 @@ AnchoredProfileMap DemoSizedMap(int n) {
         RopBin{static_cast<float>(1.0 + 0.5 * (1 + std::sin(i * 0.2))), 0.35f, BinStatus::kObstacle});
   for (int i = 0; i < n; ++i) {
     const Pose2D experience{std::fmod(i * 0.37, 10.0), std::fmod(i * 0.53, 8.0), i * 0.1};
-    map.AddProfile({static_cast<uint64_t>(i % 100), {0.05 * (i % 7), 0.0, 0.3 * (i % 11)}, experience, frame});
+    map.AddProfile({static_cast<uint64_t>(i % 100), {0.05 * (i % 7), 0.0, 0.3 * (i % 11)}, experience, frame, {}});
   }
   return map;
 }
@@ -130,7 +130,7 @@ std::optional<Pose2D> Shifted(uint64_t id) { return Pose2D{0.01 * static_cast<do
 
 void BM_AnchoredProfileMapReplay(benchmark::State& state) {
   AnchoredProfileMap map = DemoSizedMap(static_cast<int>(state.range(0)));
-  const AnchoredProfileMap::RebuildPlan plan = map.PlanRebuild(Shifted);
+  AnchoredProfileMap::RebuildPlan plan = map.PlanRebuild(Shifted);
   for (auto _ : state) {
     OccupancyGrid grid = AnchoredProfileMap::Replay(plan);
     benchmark::DoNotOptimize(grid.values().data());
@@ -142,7 +142,8 @@ BENCHMARK(BM_AnchoredProfileMapReplay)->Arg(1000)->Arg(10000)->Arg(20000)->Unit(
 // What a rebuild leaves on the frame's thread: the plan and the adopt of a replayed grid.
 void BM_AnchoredProfileMapPlanAndAdopt(benchmark::State& state) {
   AnchoredProfileMap map = DemoSizedMap(static_cast<int>(state.range(0)));
-  const OccupancyGrid replayed = AnchoredProfileMap::Replay(map.PlanRebuild(Shifted));
+  AnchoredProfileMap::RebuildPlan first = map.PlanRebuild(Shifted);
+  const OccupancyGrid replayed = AnchoredProfileMap::Replay(first);
   for (auto _ : state) {
     const AnchoredProfileMap::RebuildPlan plan = map.PlanRebuild(Shifted);
     OccupancyGrid grid = replayed;  // the copy stands in for the replay (not timed apart)

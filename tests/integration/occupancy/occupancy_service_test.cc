@@ -234,26 +234,38 @@ TEST_F(OccupancyServiceTest, CorrectedExperienceMovesTheOccupiedCells) {
   EXPECT_LE(MaxAlongX(*moved, kWallX - 0.1, kWallX + 0.1), 19) << "old wall position should now be free floor";
 }
 
-TEST_F(OccupancyServiceTest, AFrameTheMapPutsOffTheWallSeenBeforeIsAlignedWithIt) {
+TEST_F(OccupancyServiceTest, ARebuildAlignsFramesTheMapPutOffTheWallSeenBefore) {
   for (const bool align : {false, true}) {
     std::vector<std::string> args;
     if (align) args = {"--set", "occupancy.profile_alignment.window_m=0.3"};
     auto service = Start(args);
     for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
-    // The robot is back where it was, but the map puts it 0.2 m short: the wall it sees would be
-    // drawn 0.2 m in front of the wall, on floor seen free ten times.
-    const auto off = SendFrame(11, true, 1, -0.2);
-    ASSERT_TRUE(off) << service->Output();
-    EXPECT_NEAR(off->offset_x_m, align ? 0.0 : -0.2, 0.03) << "aligned: " << align;
-    EXPECT_NEAR(off->offset_y_m, 0.0, 0.03);
-    // A pose from a newer map than the grid's: not aligned against a grid the correction will move.
-    const auto newer = SendFrame(12, true, 2, -0.2);
-    ASSERT_TRUE(newer) << service->Output();
-    EXPECT_NEAR(newer->offset_x_m, -0.2, 1e-6);
+    // The robot is back where it was, but the map puts it 0.2 m short: the wall it sees is drawn
+    // 0.2 m in front of the wall, on floor seen free ten times.
+    for (uint64_t seq = 11; seq <= 20; ++seq) ASSERT_TRUE(SendFrame(seq, true, 1, -0.2)) << service->Output();
+    // A correction (the experience moves 1 cm) rebuilds the grid. (The second service gets the
+    // first one's map as a late joiner: a newer version.)
+    msg::ExperienceMap map;
+    map.header = {"robot1", 20, 2'000'000'000};
+    map.map_version = align ? 3 : 2;
+    map.current_experience_id = 1;
+    msg::Experience e;
+    e.id = 1;
+    e.x_m = 0.01;
+    map.experiences.push_back(e);
+    map_pub_->Publish(map);
+    const auto rebuilt = AwaitGrid([&](const msg::OccupancyGrid& g) { return g.map_version == map.map_version; });
+    ASSERT_TRUE(rebuilt) << service->Output();
+    EXPECT_GE(MaxAlongX(*rebuilt, kWallX - 0.05, kWallX + 0.1), 65) << "the wall";
+    if (align) {
+      EXPECT_LE(MaxAlongX(*rebuilt, kWallX - 0.3, kWallX - 0.1), 19) << "the wall drawn again 0.2 m short";
+    } else {
+      EXPECT_GE(MaxAlongX(*rebuilt, kWallX - 0.3, kWallX - 0.1), 65) << "the wall drawn again 0.2 m short";
+    }
     service->Signal(SIGTERM);
     ASSERT_EQ(service->WaitExit(10s), 0) << service->Output();
     if (align) {
-      EXPECT_NE(service->Output().find("1 of 12 kept profiles were aligned"), std::string::npos) << service->Output();
+      EXPECT_NE(service->Output().find("10 of 20 kept profiles were aligned"), std::string::npos) << service->Output();
     }
     std::filesystem::remove(state_dir_.path() / "occupancy.pb");
   }

@@ -111,7 +111,7 @@ TEST(AnchoredProfileMapTest, AReplayOnAnotherThreadWhileProfilesKeepComingGivesT
   const size_t moved = at_once.Rebuild(corrected);
   fill(at_once, 40, 40);
 
-  const AnchoredProfileMap::RebuildPlan plan = threaded.PlanRebuild(corrected);
+  AnchoredProfileMap::RebuildPlan plan = threaded.PlanRebuild(corrected);
   EXPECT_EQ(plan.moved, moved);
   EXPECT_EQ(plan.placements.size(), 40u);
   std::optional<OccupancyGrid> replayed;

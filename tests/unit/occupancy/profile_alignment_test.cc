@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include "services/occupancy/anchored_profile_map.h"
 #include "services/occupancy/occupancy_node_config.h"
 #include "tests/unit/occupancy/synthetic_scene.h"
 
@@ -92,6 +94,57 @@ TEST(ProfileAlignmentTest, AProfileOfAPlaceNotSeenBeforeIsNotMovedOntoOtherWalls
   RadialObstacleProfile few = ProfileAt({0.7, 0.1, 0.75});
   few.bins.resize(8);
   EXPECT_FALSE(AlignProfile(grid, few, {0.55, 0.0, 0.8}, On()));
+}
+
+TEST(ProfileAlignmentTest, ARebuildAlignsAMisplacedProfileAndSearchesAgainOnlyWhereItMoved) {
+  SensorModelConfig sensor;
+  sensor.reliable_range_m = 1.5;
+  const GridConfig grid{0.05, 200, 200, -5.0, -5.0};
+  const Pose2D truth{0.7, 0.1, 0.75}, placed{0.55, -0.02, 0.8};
+  const auto fill = [&](AnchoredProfileMap& map) {
+    for (int pass = 0; pass < 3; ++pass)
+      for (int i = 0; i < 12; ++i) {
+        const Pose2D seen{0.3 + 0.05 * i, -0.2 + 0.04 * i, 0.3 + 0.08 * i};
+        map.AddProfile(1, {0, 0, 0}, seen, ProfileAt(seen));
+      }
+    map.AddProfile(2, {0, 0, 0}, placed, ProfileAt(truth));  // taken at `truth`, the map says `placed`
+  };
+  const auto drawn = [](const AnchoredProfile& p) {
+    return Compose(Compose(p.experience_pose, p.offset), p.alignment.correction);
+  };
+  const auto keep = [](uint64_t) -> std::optional<Pose2D> { return std::nullopt; };
+
+  AnchoredProfileMap as_drawn(grid, sensor);
+  fill(as_drawn);
+  as_drawn.Rebuild(keep);
+  EXPECT_EQ(as_drawn.AlignedProfiles(), 0u);
+
+  AnchoredProfileMap map(grid, sensor, On());
+  fill(map);
+  EXPECT_EQ(map.AlignedProfiles(), 0u);  // new profiles join as the map puts them
+  map.Rebuild(keep);
+  EXPECT_EQ(map.AlignedProfiles(), 1u);
+  const Pose2D first = drawn(map.profiles().back());
+  EXPECT_LT(std::hypot(first.x - truth.x, first.y - truth.y), 0.05);
+  // As the map put it, its nearest obstacle point lands on seen floor; aligned, that floor takes no hit.
+  std::vector<Eigen::Vector2d> points;
+  ProfileAt(truth).ObstaclePoints(points);
+  const Eigen::Vector2d nearest = *std::min_element(
+      points.begin(), points.end(), [](const auto& a, const auto& b) { return a.norm() < b.norm(); });
+  const Pose2D short_wall = Compose(placed, {nearest.x(), nearest.y(), 0.0});
+  const CellIndex twice = map.grid().CellOf(short_wall.x, short_wall.y);
+  EXPECT_GT(as_drawn.grid().LogOdds(twice), map.grid().LogOdds(twice) + 0.5);
+
+  map.Rebuild(keep);  // nothing moved: the same correction
+  EXPECT_EQ(map.AlignedProfiles(), 1u);
+  EXPECT_EQ(drawn(map.profiles().back()).x, first.x);
+  // The map corrects experience 2 by 10 cm: searched again from there, drawn where it was taken.
+  map.Rebuild([](uint64_t id) -> std::optional<Pose2D> {
+    return id == 2 ? std::optional<Pose2D>(Pose2D{0.1, 0.0, 0.0}) : std::nullopt;
+  });
+  const Pose2D again = drawn(map.profiles().back());
+  EXPECT_EQ(map.profiles().back().alignment.searched_from->x, placed.x + 0.1);
+  EXPECT_LT(std::hypot(again.x - truth.x, again.y - truth.y), 0.05);
 }
 
 TEST(ProfileAlignmentTest, BadSettingsAreRefusedByName) {
