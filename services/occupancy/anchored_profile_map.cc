@@ -18,9 +18,10 @@ Pose2D Drawn(const Pose2D& placement, const ProfileCorrection& alignment) {
   return IsIdentity(alignment.correction) ? placement : Compose(placement, alignment.correction);
 }
 
-// Aligns one profile against `grid` (the profiles before it). A placement within a quarter cell and
-// 0.01 rad of the one last searched from keeps its correction while the corrected placement still
-// fits; else the search runs again from the placement.
+// Aligns one profile against `grid` (the profiles before it). A profile is looked at again once its
+// placement has moved a cell or 0.03 rad since it last was, or when its corrected placement no
+// longer fits. (The map's corrections move most anchors a little at every rebuild: searching
+// every misplaced profile each time made a demo run's rebuilds take 2-5 s.)
 void Align(const OccupancyGrid& grid, const RadialObstacleProfile& profile, const Pose2D& placement,
            const ProfileAlignmentConfig& config, ProfileCorrection& alignment) {
   if (config.window_m <= 0) {
@@ -28,10 +29,10 @@ void Align(const OccupancyGrid& grid, const RadialObstacleProfile& profile, cons
     return;
   }
   if (const auto& from = alignment.searched_from) {
-    const bool same_place = std::hypot(from->x - placement.x, from->y - placement.y) < 0.25 * grid.grid_config().resolution_m &&
-                            std::abs(WrapAngle(from->theta - placement.theta)) < 0.01;
-    if (same_place && (IsIdentity(alignment.correction) ||
-                       !IsMisplaced(grid, profile, Compose(placement, alignment.correction), config)))
+    const bool moved = std::hypot(from->x - placement.x, from->y - placement.y) >= grid.grid_config().resolution_m ||
+                       std::abs(WrapAngle(from->theta - placement.theta)) >= 0.03;
+    if (!moved && (IsIdentity(alignment.correction) ||
+                   !IsMisplaced(grid, profile, Compose(placement, alignment.correction), config)))
       return;
   }
   const std::optional<Pose2D> found = AlignProfile(grid, profile, placement, config);

@@ -27,8 +27,8 @@
 namespace rslam::occupancy {
 
 // Where a rebuild's alignment (profile_alignment.h) put a profile: drawn at experience_pose ⊕
-// offset ⊕ correction. A rebuild searches again only where the profile's own placement moved since
-// (searched_from), or where its corrected placement now falls on seen-free floor.
+// offset ⊕ correction. A rebuild looks at a profile again only once its placement has moved, or
+// when its corrected placement no longer fits (anchored_profile_map.cc).
 struct ProfileCorrection {
   Pose2D correction;                   // in the robot's frame; identity when not aligned
   std::optional<Pose2D> searched_from; // experience_pose ⊕ offset when last looked at

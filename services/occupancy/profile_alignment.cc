@@ -12,7 +12,7 @@ namespace rslam::occupancy {
 namespace {
 
 constexpr size_t kMinPoints = 10;       // fewer obstacle points do not pin a pose down
-constexpr double kAngleStepRad = 0.02;  // the search's turn step; its move step is half a cell
+constexpr double kAngleStepRad = 0.02;  // the search's finest turn step; its finest move step is half a cell
 // Ties go to the smaller correction: a candidate pays 0.1 points per (0.2 m)^2 and per (0.1 rad)^2.
 constexpr double kTieBreakPoints = 0.1;
 constexpr double kTieBreakM = 0.2;
@@ -87,13 +87,13 @@ std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstac
   cv::distanceTransform(free_of_obstacles, field, cv::DIST_L2, cv::DIST_MASK_5);
   field.forEach<float>([](float& d, const int*) { d = std::exp(-0.5f * d * d); });
 
-  const int steps_m = static_cast<int>(std::lround(config.window_m / (0.5 * res)));
-  const int steps_rad = static_cast<int>(std::lround(config.window_rad / kAngleStepRad));
-  const double step_rad = steps_rad > 0 ? config.window_rad / steps_rad : 0.0;
   // The pose in patch cells (x0, y0 at 0).
   const double px = (pose.x - gc.origin_x_m) / res - x0, py = (pose.y - gc.origin_y_m) / res - y0;
   std::vector<Eigen::Vector2d> turned(points.size());
+  double turned_by = NAN;
   const auto turn = [&](double dtheta) {
+    if (dtheta == turned_by) return;
+    turned_by = dtheta;
     const double c = std::cos(pose.theta + dtheta), s = std::sin(pose.theta + dtheta);
     for (size_t i = 0; i < points.size(); ++i)
       turned[i] = {px + (c * points[i].x() - s * points[i].y()) / res, py + (s * points[i].x() + c * points[i].y()) / res};
@@ -108,26 +108,37 @@ std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstac
   };
   turn(0.0);
   const double nominal = score_at(0.0, 0.0);
-  double best = nominal;
-  std::optional<Pose2D> best_pose;
-  for (int a = -steps_rad; a <= steps_rad; ++a) {
-    const double dtheta = a * step_rad;
+  double best = nominal, best_dtheta = 0.0, best_dx = 0.0, best_dy = 0.0;  // dx, dy in cells
+  bool found = false;
+  const double max_cells = config.window_m / res + 1e-9;
+  const auto consider = [&](double dtheta, double dx, double dy) {
+    if ((dtheta == 0 && dx == 0 && dy == 0) || std::abs(dx) > max_cells || std::abs(dy) > max_cells ||
+        std::abs(dtheta) > config.window_rad + 1e-9)
+      return;
     turn(dtheta);
+    const double moved_m = std::hypot(dx, dy) * res;
+    const double score = score_at(dx, dy) - kTieBreakPoints * (moved_m * moved_m / (kTieBreakM * kTieBreakM) +
+                                                               dtheta * dtheta / (kTieBreakRad * kTieBreakRad));
+    if (score > best) {
+      best = score;
+      best_dtheta = dtheta, best_dx = dx, best_dy = dy;
+      found = true;
+    }
+  };
+  // Whole cells and two turn steps over the window, then half of each around the best.
+  const int steps_m = static_cast<int>(std::floor(max_cells));
+  const int steps_rad = static_cast<int>(std::lround(config.window_rad / (2 * kAngleStepRad)));
+  const double coarse_rad = steps_rad > 0 ? config.window_rad / steps_rad : 0.0;
+  for (int a = -steps_rad; a <= steps_rad; ++a)
     for (int iy = -steps_m; iy <= steps_m; ++iy)
-      for (int ix = -steps_m; ix <= steps_m; ++ix) {
-        if (a == 0 && ix == 0 && iy == 0) continue;
-        const double dx = 0.5 * ix, dy = 0.5 * iy;  // cells
-        const double moved_m = std::hypot(dx, dy) * res;
-        const double score = score_at(dx, dy) - kTieBreakPoints * (moved_m * moved_m / (kTieBreakM * kTieBreakM) +
-                                                                   dtheta * dtheta / (kTieBreakRad * kTieBreakRad));
-        if (score > best) {
-          best = score;
-          best_pose = Pose2D{pose.x + dx * res, pose.y + dy * res, WrapAngle(pose.theta + dtheta)};
-        }
-      }
-  }
-  if (!best_pose || best - nominal < config.min_gain_points) return std::nullopt;
-  return best_pose;
+      for (int ix = -steps_m; ix <= steps_m; ++ix) consider(a * coarse_rad, ix, iy);
+  const double around_theta = best_dtheta, around_x = best_dx, around_y = best_dy;
+  for (int a = -1; a <= 1; ++a)
+    for (int iy = -1; iy <= 1; ++iy)
+      for (int ix = -1; ix <= 1; ++ix)
+        consider(around_theta + 0.5 * a * coarse_rad, around_x + 0.5 * ix, around_y + 0.5 * iy);
+  if (!found || best - nominal < config.min_gain_points) return std::nullopt;
+  return Pose2D{pose.x + best_dx * res, pose.y + best_dy * res, WrapAngle(pose.theta + best_dtheta)};
 }
 
 }  // namespace rslam::occupancy
