@@ -122,6 +122,19 @@ class OccupancyServiceTest : public ::testing::Test {
     return pose;
   }
 
+  // A map snapshot: experience 1 moved to (experience_x, 0).
+  static msg::ExperienceMap Correction(uint64_t version, double experience_x) {
+    msg::ExperienceMap map;
+    map.header = {"robot1", 10, 1'000'000'000};
+    map.map_version = version;
+    map.current_experience_id = 1;
+    msg::Experience e;
+    e.id = 1;
+    e.x_m = experience_x;
+    map.experiences.push_back(e);
+    return map;
+  }
+
   // Publishes the frame taken at the origin (pose first or image first; the pose from that map
   // version, which puts the robot at x = map_x) and waits for its profile.
   std::optional<msg::ObstacleProfile> SendFrame(uint64_t seq, bool pose_first = true, uint64_t map_version = 1,
@@ -218,15 +231,7 @@ TEST_F(OccupancyServiceTest, CorrectedExperienceMovesTheOccupiedCells) {
       << service->Output();
 
   // Loop closure moved experience 1 (and everything seen from it) half a metre along x.
-  msg::ExperienceMap map;
-  map.header = {"robot1", 10, 1'000'000'000};
-  map.map_version = 2;
-  map.current_experience_id = 1;
-  msg::Experience e;
-  e.id = 1;
-  e.x_m = 0.5;
-  map.experiences.push_back(e);
-  map_pub_->Publish(map);
+  map_pub_->Publish(Correction(2, 0.5));
 
   const auto moved = AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 2; });
   ASSERT_TRUE(moved) << service->Output();
@@ -245,16 +250,9 @@ TEST_F(OccupancyServiceTest, ARebuildAlignsFramesTheMapPutOffTheWallSeenBefore) 
     for (uint64_t seq = 11; seq <= 20; ++seq) ASSERT_TRUE(SendFrame(seq, true, 1, -0.2)) << service->Output();
     // A correction (the experience moves 1 cm) rebuilds the grid. (The second service gets the
     // first one's map as a late joiner: a newer version.)
-    msg::ExperienceMap map;
-    map.header = {"robot1", 20, 2'000'000'000};
-    map.map_version = align ? 3 : 2;
-    map.current_experience_id = 1;
-    msg::Experience e;
-    e.id = 1;
-    e.x_m = 0.01;
-    map.experiences.push_back(e);
-    map_pub_->Publish(map);
-    const auto rebuilt = AwaitGrid([&](const msg::OccupancyGrid& g) { return g.map_version == map.map_version; });
+    const uint64_t version = align ? 3 : 2;
+    map_pub_->Publish(Correction(version, 0.01));
+    const auto rebuilt = AwaitGrid([&](const msg::OccupancyGrid& g) { return g.map_version == version; });
     ASSERT_TRUE(rebuilt) << service->Output();
     EXPECT_GE(MaxAlongX(*rebuilt, kWallX - 0.05, kWallX + 0.1), 65) << "the wall";
     if (align) {
@@ -275,19 +273,9 @@ TEST_F(OccupancyServiceTest, WhileTheMapKeepsCorrectingItRebuildsAtMostEveryNFra
   auto service = Start({"--set", "occupancy.grid_publish_every_n_frames=1", "--set",
                         "occupancy.rebuild_at_most_every_n_frames=5"});
   for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
-  auto correction = [](uint64_t version, double experience_x) {
-    msg::ExperienceMap map;
-    map.header = {"robot1", 10, 1'000'000'000};
-    map.map_version = version;
-    msg::Experience e;
-    e.id = 1;
-    e.x_m = experience_x;
-    map.experiences.push_back(e);
-    return map;
-  };
-  map_pub_->Publish(correction(2, 0.5));  // the first correction is applied at once
+  map_pub_->Publish(Correction(2, 0.5));  // the first correction is applied at once
   ASSERT_TRUE(AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 2; })) << service->Output();
-  map_pub_->Publish(correction(3, 0.0));  // the next one waits for 5 frames since the rebuild
+  map_pub_->Publish(Correction(3, 0.0));  // the next one waits for 5 frames since the rebuild
   ASSERT_TRUE(map_pub_->WaitForAcknowledgments(5s));
   for (uint64_t seq = 11; seq <= 13; ++seq) {
     // The poses come from the corrected map already; the grid is not on it until it is rebuilt.
