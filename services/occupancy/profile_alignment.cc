@@ -18,10 +18,15 @@ constexpr double kTieBreakPoints = 0.1;
 constexpr double kTieBreakM = 0.2;
 constexpr double kTieBreakRad = 0.1;
 
+// Obstacle points are matched up to here: the configured range, or the grid's reliable range.
+double MatchRange(const OccupancyGrid& grid, const ProfileAlignmentConfig& config) {
+  return std::min(config.match_range_m, grid.sensor_config().reliable_range_m);
+}
+
 // The obstacle points within the match range, in the robot's frame.
 std::vector<Eigen::Vector2d> MatchedPoints(const OccupancyGrid& grid, const RadialObstacleProfile& profile,
                                            const ProfileAlignmentConfig& config) {
-  const double range = std::min(config.match_range_m, grid.sensor_config().reliable_range_m);
+  const double range = MatchRange(grid, config);
   std::vector<Eigen::Vector2d> points;
   profile.ObstaclePoints(points);
   std::erase_if(points, [&](const Eigen::Vector2d& p) { return p.norm() > range; });
@@ -67,14 +72,13 @@ std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstac
   if (config.window_m <= 0) return std::nullopt;
   const std::vector<Eigen::Vector2d> points = MatchedPoints(grid, profile, config);
   if (!HasMisplacedShare(grid, points, pose, config)) return std::nullopt;
-  const double range = std::min(config.match_range_m, grid.sensor_config().reliable_range_m);
 
   // Likelihood field over the patch the search can reach: exp(-d^2 / 2) of the distance d (cells)
   // to the nearest occupied cell.
   const GridConfig& gc = grid.grid_config();
   const double res = gc.resolution_m;
   const CellIndex centre = grid.CellOf(pose.x, pose.y);
-  const int half = static_cast<int>(std::ceil((range + config.window_m) / res)) + 2;
+  const int half = static_cast<int>(std::ceil((MatchRange(grid, config) + config.window_m) / res)) + 2;
   const int side = 2 * half + 1, x0 = centre.x - half, y0 = centre.y - half;
   const double occupied = OccupiedLogOdds(grid);
   cv::Mat free_of_obstacles(side, side, CV_8U, cv::Scalar(255));

@@ -38,14 +38,19 @@ RadialObstacleProfile ProfileAt(const Pose2D& pose, const std::vector<Wall>& sce
   return p;
 }
 
+// The corner seen from a dozen poses, three times over.
+std::vector<Pose2D> SeenFrom() {
+  std::vector<Pose2D> poses;
+  for (int pass = 0; pass < 3; ++pass)
+    for (int i = 0; i < 12; ++i) poses.push_back({0.3 + 0.05 * i, -0.2 + 0.04 * i, 0.3 + 0.08 * i});
+  return poses;
+}
+
 OccupancyGrid SeenGrid() {
   SensorModelConfig sensor;
   sensor.reliable_range_m = 1.5;
   OccupancyGrid grid(GridConfig{0.05, 200, 200, -5.0, -5.0}, sensor);
-  // The corner seen from a dozen poses, three times over.
-  for (int pass = 0; pass < 3; ++pass)
-    for (int i = 0; i < 12; ++i)
-      grid.InsertProfile(ProfileAt({0.3 + 0.05 * i, -0.2 + 0.04 * i, 0.3 + 0.08 * i}), {0.3 + 0.05 * i, -0.2 + 0.04 * i, 0.3 + 0.08 * i});
+  for (const Pose2D& seen : SeenFrom()) grid.InsertProfile(ProfileAt(seen), seen);
   return grid;
 }
 
@@ -102,11 +107,7 @@ TEST(ProfileAlignmentTest, ARebuildAlignsAMisplacedProfileAndSearchesAgainOnlyWh
   const GridConfig grid{0.05, 200, 200, -5.0, -5.0};
   const Pose2D truth{0.7, 0.1, 0.75}, placed{0.55, -0.02, 0.8};
   const auto fill = [&](AnchoredProfileMap& map) {
-    for (int pass = 0; pass < 3; ++pass)
-      for (int i = 0; i < 12; ++i) {
-        const Pose2D seen{0.3 + 0.05 * i, -0.2 + 0.04 * i, 0.3 + 0.08 * i};
-        map.AddProfile(1, {0, 0, 0}, seen, ProfileAt(seen));
-      }
+    for (const Pose2D& seen : SeenFrom()) map.AddProfile(1, {0, 0, 0}, seen, ProfileAt(seen));
     map.AddProfile(2, {0, 0, 0}, placed, ProfileAt(truth));  // taken at `truth`, the map says `placed`
   };
   const auto drawn = [](const AnchoredProfile& p) {
