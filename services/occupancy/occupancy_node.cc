@@ -90,11 +90,13 @@ class OccupancyNode::Mapper {
 
   ~Mapper() { StopRebuilds(); }
 
-  // Stops processing, finishes a rebuild under way, then saves the state and exports the grid.
+  // Stops processing, finishes a rebuild under way and the newest correction still waiting for
+  // one (rebuilds are spaced), then saves the state and exports the grid.
   void Stop() {
     {
       std::lock_guard lock(mutex_);
       stopped_ = true;
+      if (RebuildDue()) ApplyPendingCorrection();
     }
     StopRebuilds();
     if (config_.profile_alignment.window_m > 0)
@@ -151,9 +153,15 @@ class OccupancyNode::Mapper {
     if (rebuilt_version_ && map.map_version <= *rebuilt_version_) return;
     if (pending_correction_ && map.map_version <= pending_correction_->map_version) return;
     pending_correction_ = std::move(correction);
-    // A rebuild replays every profile: while the map keeps correcting, do it at most once every
-    // rebuild_at_most_every_n_frames frames (the newest correction waits for the next frame).
-    if (frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames) ApplyPendingCorrection();
+    if (RebuildDue()) ApplyPendingCorrection();
+  }
+
+  // A rebuild replays every profile: while the map keeps correcting, do it at most once every
+  // rebuild_at_most_every_n_frames frames and within rebuild_max_busy_share of the time (the
+  // newest correction waits for a later frame); on stopping, at once.
+  bool RebuildDue() const {
+    return stopped_ || (frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames &&
+                        std::chrono::steady_clock::now() >= rebuild_not_before_);
   }
 
   // Starts a rebuild for the pending correction unless one is under way (the newest correction
@@ -187,8 +195,12 @@ class OccupancyNode::Mapper {
       // Nothing else writes the plan while it is set (ApplyPendingCorrection waits for the reset).
       PlannedRebuild& job = *planned_rebuild_;
       lock.unlock();
+      const auto start = std::chrono::steady_clock::now();
       OccupancyGrid grid = AnchoredProfileMap::Replay(job.plan);
+      const auto end = std::chrono::steady_clock::now();
       lock.lock();
+      rebuild_not_before_ = end + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      (end - start) * (1.0 / config_.rebuild_max_busy_share - 1.0));
       map_.Adopt(std::move(grid), job.plan);
       const uint64_t version = job.map_version;
       grid_map_version_ = std::max(grid_map_version_, version);
@@ -196,9 +208,8 @@ class OccupancyNode::Mapper {
       spdlog::info("map version {}: rebuilt the grid ({} of {} profiles moved)", version, job.plan.moved,
                    job.plan.placements.size());
       planned_rebuild_.reset();
-      if (stopped_) continue;  // a plan made before the stop still finishes, for the saved and exported grid
-      PublishGrid(last_header_, version);
-      if (frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames) ApplyPendingCorrection();
+      PublishGrid(last_header_, version);  // on stopping too: subscribers get the grid that is saved
+      if (RebuildDue()) ApplyPendingCorrection();
     }
   }
 
@@ -250,8 +261,7 @@ class OccupancyNode::Mapper {
     profile_pub_->Publish(ProfileToMessage(pose.header, kept ? map_.profiles().back() : anchored,
                                            static_cast<float>(config_.sensor.reliable_range_m)));
     if (frames_since_rebuild_ < std::numeric_limits<int>::max() / 2) ++frames_since_rebuild_;
-    if (pending_correction_ && frames_since_rebuild_ >= config_.rebuild_at_most_every_n_frames)
-      ApplyPendingCorrection();  // the rebuild publishes the grid when it is done
+    if (pending_correction_ && RebuildDue()) ApplyPendingCorrection();  // the rebuild publishes the grid when done
     if (++frames_since_grid_ >= config_.grid_publish_every_n_frames) PublishGrid(pose.header, grid_map_version_);
   }
 
@@ -349,6 +359,7 @@ class OccupancyNode::Mapper {
   std::condition_variable rebuild_wake_;
   std::thread rebuild_thread_;  // started by the first rebuild, joined by StopRebuilds
   int frames_since_rebuild_ = std::numeric_limits<int>::max() / 2;
+  std::chrono::steady_clock::time_point rebuild_not_before_;  // rebuild_max_busy_share after the last rebuild
   msg::Header last_header_;
   int frames_since_grid_ = 0;
   bool dirty_ = true;  // a fresh start saves (an empty map) too, so a restart sees the file

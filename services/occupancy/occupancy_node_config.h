@@ -60,6 +60,10 @@ struct OccupancyNodeConfig {
   double rebuild_min_shift_m = 0.005;   // experience moves smaller than this do not rebuild
   double rebuild_min_turn_rad = 0.002;
   int rebuild_at_most_every_n_frames = 10;  // a rebuild replays every profile: bound how often
+  // ... and how much of the time the rebuild thread takes: a rebuild of T seconds is followed by
+  // none for T (1 / share - 1) seconds (1: back to back). Rebuilds grow with the map; back to back
+  // they took one of a 2-core machine's cores late in a long demo run.
+  double rebuild_max_busy_share = 0.5;
   double profile_min_spacing_m = 0.0;  // a frame's profile joins the map only this far from the last
   double profile_min_turn_rad = 0.0;   // ... or turned this much (anchored_profile_map.h IsNewView)
   ProfileAlignmentConfig profile_alignment;  // a misplaced profile is moved onto the grid (off by default)
@@ -79,6 +83,8 @@ struct OccupancyNodeConfig {
     v("rebuild_min_turn_rad", rebuild_min_turn_rad, "... or turned at least this much (rad)");
     v("rebuild_at_most_every_n_frames", rebuild_at_most_every_n_frames,
       "while the map keeps correcting, rebuild the grid at most once every this many frames");
+    v("rebuild_max_busy_share", rebuild_max_busy_share,
+      "... and spend at most this share of the time rebuilding (0-1; 1: rebuilds back to back)");
     v("profile_min_spacing_m", profile_min_spacing_m,
       "a frame's profile joins the map only if the robot moved this far from the last one's pose (m) ...");
     v("profile_min_turn_rad", profile_min_turn_rad, "... or turned this much (rad), or the experience changed");
@@ -96,6 +102,7 @@ struct OccupancyNodeConfig {
     Require(grid_publish_every_n_frames >= 1, "grid_publish_every_n_frames", "must be >= 1");
     Require(join_buffer_frames >= 1 && join_buffer_frames <= 10000, "join_buffer_frames", "must be 1..10000");
     Require(rebuild_at_most_every_n_frames >= 0, "rebuild_at_most_every_n_frames", "must be >= 0");
+    Require(rebuild_max_busy_share > 0 && rebuild_max_busy_share <= 1, "rebuild_max_busy_share", "must be in (0, 1]");
     Require(std::isfinite(rebuild_min_shift_m) && rebuild_min_shift_m >= 0, "rebuild_min_shift_m",
             "must be >= 0");
     Require(std::isfinite(rebuild_min_turn_rad) && rebuild_min_turn_rad >= 0, "rebuild_min_turn_rad",

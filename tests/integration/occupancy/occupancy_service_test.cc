@@ -291,6 +291,29 @@ TEST_F(OccupancyServiceTest, WhileTheMapKeepsCorrectingItRebuildsAtMostEveryNFra
   EXPECT_TRUE(ShowsWallAhead(*rebuilt, kWallX)) << "the wall is back where the experience went back";
 }
 
+TEST_F(OccupancyServiceTest, TheCorrectionStillWaitingAtSigtermIsInTheGridItPublishesAndSaves) {
+  // Rebuilds spaced far apart: the second correction is still waiting when the service stops.
+  auto service = Start({"--set", "occupancy.rebuild_at_most_every_n_frames=1000"});
+  for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+  map_pub_->Publish(Correction(2, 0.5));  // the first correction is applied at once
+  ASSERT_TRUE(AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 2; })) << service->Output();
+  map_pub_->Publish(Correction(3, 0.0));  // the experience back where it was: the wall at 1 m again
+  ASSERT_TRUE(map_pub_->WaitForAcknowledgments(5s));
+  ASSERT_TRUE(SendFrame(11)) << service->Output();  // one more frame through: the correction is in
+  service->Signal(SIGTERM);
+  const auto last = AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 3; });
+  ASSERT_EQ(service->WaitExit(10s), 0) << service->Output();
+  ASSERT_TRUE(last) << "no grid of the last correction published on the way out\n" << service->Output();
+  EXPECT_TRUE(ShowsWallAhead(*last, kWallX));
+
+  const sim::WorldMap saved = sim::WorldMap::LoadFromYaml((state_dir_.path() / "grid.yaml").string());
+  const auto at = [&saved](double x) { return saved.Classify(saved.WorldToCell({x, 0.0})); };
+  // The cell the wall's face closes (5-cm cells).
+  EXPECT_EQ(at(kWallX - 0.025), sim::CellClass::kOccupied) << "the exported grid's wall is not at 1 m";
+  EXPECT_EQ(at(kWallX + 0.475), sim::CellClass::kUnknown) << "the exported grid still has the wall at 1.5 m";
+  EXPECT_EQ(at(kWallX - 0.4), sim::CellClass::kFree);
+}
+
 TEST_F(OccupancyServiceTest, AcceptsMonoImages) {
   auto service = Start();
   const cv::Mat bgr = renderer_.Render(Pose2D{}, 1);
@@ -424,6 +447,15 @@ TEST(OccupancyServiceCommandLineTest, HelpListsConfigKeys) {
                           "occupancy.grid.resolution_m", "occupancy.sensor.reliable_range_m",
                           "occupancy.grid_publish_every_n_frames"})
     EXPECT_NE(output.find(key), std::string::npos) << key;
+}
+
+TEST(OccupancyServiceCommandLineTest, BadRebuildShareExitsTwoNamingIt) {
+  for (const char* bad : {"0", "1.5", "nan"}) {
+    const auto [code, output] =
+        testing::RunToExit(kBinary, {"--set", std::string("occupancy.rebuild_max_busy_share=") + bad});
+    EXPECT_EQ(code, 2) << bad << ": " << output;
+    EXPECT_NE(output.find("rebuild_max_busy_share"), std::string::npos) << output;
+  }
 }
 
 TEST(OccupancyServiceCommandLineTest, UnknownConfigKeyExitsTwoNamingIt) {
