@@ -39,6 +39,7 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
   grid.cells.assign(static_cast<size_t>(grid.width) * grid.height, CellClass::kFree);
   grid.obstacle.assign(grid.cells.size(), 0);
   grid.unseen.assign(grid.cells.size(), 0);
+  grid.margin_goal.assign(grid.cells.size(), 0);
   // Cells past the map edge count as occupied: the robot never plans to leave the map.
   for (int cy = 0; cy < grid.height; ++cy) {
     for (int cx = 0; cx < grid.width; ++cx) {
@@ -63,6 +64,8 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
       else if (goal_cells >= config.min_unknown_cells_for_goal) cell = CellClass::kUnknown;
       else if (unseen + uncertain >= config.min_unknown_cells_for_goal) cell = CellClass::kUncertain;
       grid.unseen[static_cast<size_t>(cy) * grid.width + cx] = unseen + uncertain > 0;
+      grid.margin_goal[static_cast<size_t>(cy) * grid.width + cx] =
+          occ > 0 && raw == 0 && goal_cells >= config.min_unknown_cells_for_goal;
     }
   }
   return grid;

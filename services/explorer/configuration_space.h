@@ -28,6 +28,9 @@ struct CoarseGrid {
   std::vector<uint8_t> obstacle;
   // 1 where the block holds an unknown or uncertain occupancy cell (whatever its class).
   std::vector<uint8_t> unseen;
+  // 1 where a block of the margin (occupied by dilation, no obstacle of its own) holds what would
+  // make it a goal.
+  std::vector<uint8_t> margin_goal;
 
   CellClass At(int x, int y) const { return cells[static_cast<size_t>(y) * width + x]; }
   bool Contains(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }

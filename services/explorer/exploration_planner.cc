@@ -117,6 +117,10 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
     blocking_obstacles_.push_back(*obstacle);
   }
   if (plan.goal_x < 0) return;
+  if (plan.margin_goal) {  // the way into the margin is narrow: once refused, not tried again
+    SetAside(plan.goal_x, plan.goal_y, "unknown space in the margin: the way to it was refused");
+    return;
+  }
   // Every max_blocked_attempts refusals set the goal aside (PlanFrom may try it again). On the
   // finer grid they count for the cells of the coarse cell holding the goal together: the way to
   // each is mostly the same, and one by one a cluster of small goals behind a gap too narrow for
@@ -302,6 +306,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   int replans_left = kMaxReplansForBlockedMoves;
   std::optional<Plan> first_blocked;  // returned if keeping off its obstacle leaves nothing to explore
   bool squeezing = false;             // planning through the dilation margin (below)
+  bool margin_goals_added = false;    // ... and to unknown space inside it
   // An off-centre robot first steps to the centre of its cell, unless that step itself comes
   // closer to an obstacle than the robot already is (it stands off-centre beside a wall).
   const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
@@ -379,6 +384,13 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
         }
         continue;
       }
+      // Still nothing: the unknown space may lie in the margin itself (margin_goals).
+      if (config_.margin_goals && squeezing && !margin_goals_added) {
+        margin_goals_added = true;
+        for (size_t i = 0; i < n; ++i)
+          if (cs.margin_goal[i] && !IsSetAside(static_cast<int>(i % w), static_cast<int>(i / w))) goal[i] = 1;
+        continue;
+      }
       if (config_.finishing_cell_factor > 0 && !finishing_) {
         StartFinishing();
         Plan finer = PlanFrom(occupancy, robot);
@@ -426,6 +438,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     }
     plan.goal_x = gx;
     plan.goal_y = gy;
+    plan.margin_goal = margin_goals_added && cs.margin_goal[static_cast<size_t>(gy) * w + gx];
     if (path.size() == 1) {
       // The unknown is here or next door: look, unless we already have.
       if (looked_here) {

@@ -8,7 +8,8 @@
 //     moves (their obstacles, the goals set aside after them) is all that stands in the way: then
 //     it looks all round and tries those goals again (blocked_goal_retries); or unless a way
 //     through the margin itself leads to unknown space (squeeze_through_margin: doors narrower
-//     than the robot plus both margins); or unless the finer grid of finishing_cell_factor, on
+//     than the robot plus both margins), or to unknown space inside the margin (margin_goals: a
+//     door's far side); or unless the finer grid of finishing_cell_factor, on
 //     which the planner then goes on to the end, still reaches unknown space;
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
@@ -58,6 +59,7 @@ struct Plan {
   Pose2D target;          // where the robot ends (heading of the last move)
   int goal_x = -1;        // coarse cell of the unknown space the plan heads for
   int goal_y = -1;
+  bool margin_goal = false;  // that cell is in the margin (ExplorerConfig::margin_goals)
   int32_t transform_cost = 0;  // exploration transform at the robot's cell
 };
 

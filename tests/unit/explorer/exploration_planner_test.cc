@@ -643,6 +643,58 @@ TestGrid RoomWithARoundTablesGap() {
   return grid;
 }
 
+TEST(ExplorationPlannerTest, LooksIntoUnknownSpaceTheMarginHidesBeforeCallingItComplete) {
+  const TestGrid grid = RoomWithARoundTablesGap();
+  ExplorerConfig config = Config();
+  config.robot_radius_m = 0.2;
+  config.coarse_cell_factor = 4;
+  const Pose2D robot{2.0, 1.4, 0.0};
+  EXPECT_TRUE(ExplorationPlanner(config).PlanFrom(grid.View(), robot).complete);  // margin_goals off
+  config.margin_goals = true;
+  ExplorationPlanner planner(config);
+  const Plan plan = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(plan.complete) << plan.reason;
+  EXPECT_NE(plan.reason.find("through the margin"), std::string::npos) << plan.reason;
+  EXPECT_EQ(plan.goal_x, 25);  // the cell holding the gap (x 100..103)
+  EXPECT_GT(plan.target.x, 4.3);
+  EXPECT_NEAR(plan.target.y, 1.4, 0.3);
+  ExpectMovesClear(planner, grid.View(), plan, robot);
+  EXPECT_TRUE(plan.margin_goal);
+  // A refused move on the narrow way there sets that goal aside at once (no strikes, no
+  // retries), and exploration ends once every cell of the gap has been refused.
+  {
+    ExplorationPlanner refused(config);
+    Plan p = refused.PlanFrom(grid.View(), robot);
+    for (int k = 0; k < 20 && !p.complete; ++k, p = refused.PlanFrom(grid.View(), robot)) {
+      EXPECT_TRUE(p.margin_goal) << p.reason;
+      refused.ReportBlocked(p);
+    }
+    EXPECT_TRUE(p.complete) << p.reason;
+    for (const SetAsideGoal& g : refused.set_aside_goals()) {
+      EXPECT_FALSE(g.blocked) << g.reason;
+      EXPECT_NE(g.reason.find("refused"), std::string::npos) << g.reason;
+    }
+  }
+  // Looked at from next door and still unknown (a gap in a wall drawn with holes), each cell of
+  // the margin holding unknown space is set aside in turn, and exploration ends.
+  Pose2D at = plan.target;
+  Plan next = planner.PlanFrom(grid.View(), at);
+  for (int k = 0; k < 40 && !next.complete; ++k, next = planner.PlanFrom(grid.View(), at)) {
+    if (next.commands.size() == 1 && next.commands[0].kind == Kind::kPirouette) planner.RecordPirouette(at);
+    else at = next.target;
+  }
+  EXPECT_TRUE(next.complete) << next.reason;
+  for (const SetAsideGoal& g : planner.set_aside_goals())
+    EXPECT_NE(g.reason.find("still unknown after a pirouette"), std::string::npos) << g.reason;
+  // Once the space beyond the gap is seen free, the robot goes through it (squeezing) to explore on.
+  TestGrid seen = grid;
+  for (int y = 21; y <= 35; ++y)
+    for (int x = 101; x < 110; ++x) seen.Set(x, y, 0);
+  const Plan through = ExplorationPlanner(config).PlanFrom(seen.View(), robot);
+  ASSERT_FALSE(through.complete) << through.reason;
+  EXPECT_GT(through.target.x, 5.0);
+}
+
 TEST(ExplorationPlannerTest, GoesOnOnAFinerGridBeforeCallingItComplete) {
   const TestGrid grid = RoomWithARoundTablesGap();
   ExplorerConfig config = Config();
