@@ -26,7 +26,7 @@ struct ExplorerConfig {
   // plus both margins lies in the margin itself, so no goal was left past it (a demo run ended
   // with the space past a 0.6 m door unseen). One refused move on the narrow way to such a goal
   // sets it aside. Off by default: in six demo runs it raised coverage to 0.945-0.962 (0.95 or
-  // more in five), but a wall drawn with holes offers 10-40 such cells, each a trip and a look,
+  // more in five), but a wall drawn with holes offers 20-40 such cells, each a trip and a look,
   // and four of the six runs reached the demo's 280-s limit (tools/demo/MEASUREMENTS.md).
   bool margin_goals = false;
   bool straighten_paths = true;       // cut the grid path's corners where a straight move is clear

@@ -61,8 +61,8 @@ struct OccupancyNodeConfig {
   double rebuild_min_turn_rad = 0.002;
   int rebuild_at_most_every_n_frames = 10;  // a rebuild replays every profile: bound how often
   // ... and how much of the time the rebuild thread takes: a rebuild of T seconds is followed by
-  // none for T (1 / share - 1) seconds (1: back to back). Rebuilds grow with the map; back to back
-  // they took one of a 2-core machine's cores late in a long demo run.
+  // none for T (1 / share - 1) seconds (1: back to back). Rebuilds grow with the map; back to back,
+  // late in a long demo run, they kept the service at a full core of a 2-core machine.
   double rebuild_max_busy_share = 0.5;
   double profile_min_spacing_m = 0.0;  // a frame's profile joins the map only this far from the last
   double profile_min_turn_rad = 0.0;   // ... or turned this much (anchored_profile_map.h IsNewView)

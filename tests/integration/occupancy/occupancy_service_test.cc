@@ -292,26 +292,43 @@ TEST_F(OccupancyServiceTest, WhileTheMapKeepsCorrectingItRebuildsAtMostEveryNFra
 }
 
 TEST_F(OccupancyServiceTest, TheCorrectionStillWaitingAtSigtermIsInTheGridItPublishesAndSaves) {
-  // Rebuilds spaced far apart: the second correction is still waiting when the service stops.
-  auto service = Start({"--set", "occupancy.rebuild_at_most_every_n_frames=1000"});
-  for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
-  map_pub_->Publish(Correction(2, 0.5));  // the first correction is applied at once
-  ASSERT_TRUE(AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 2; })) << service->Output();
-  map_pub_->Publish(Correction(3, 0.0));  // the experience back where it was: the wall at 1 m again
-  ASSERT_TRUE(map_pub_->WaitForAcknowledgments(5s));
-  ASSERT_TRUE(SendFrame(11)) << service->Output();  // one more frame through: the correction is in
-  service->Signal(SIGTERM);
-  const auto last = AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version == 3; });
-  ASSERT_EQ(service->WaitExit(10s), 0) << service->Output();
-  ASSERT_TRUE(last) << "no grid of the last correction published on the way out\n" << service->Output();
-  EXPECT_TRUE(ShowsWallAhead(*last, kWallX));
+  // Rebuilds spaced far apart, by frames or by the rebuild thread's share of the time (a millionth:
+  // a rebuild of a millisecond holds the next for over a quarter of an hour): the second
+  // correction is still waiting when the service stops.
+  const std::vector<std::vector<std::string>> spacings{
+      {"--set", "occupancy.rebuild_at_most_every_n_frames=1000"},
+      {"--set", "occupancy.rebuild_at_most_every_n_frames=0", "--set", "occupancy.rebuild_max_busy_share=0.000001"}};
+  uint64_t version = 1;
+  for (const auto& spacing : spacings) {
+    std::vector<std::string> args = spacing;
+    args.insert(args.end(), {"--set", "occupancy.grid_publish_every_n_frames=1"});
+    auto service = Start(args);
+    for (uint64_t seq = 1; seq <= 10; ++seq) ASSERT_TRUE(SendFrame(seq)) << service->Output();
+    const uint64_t first = ++version, second = ++version;  // the second service gets the first's map as a late joiner
+    map_pub_->Publish(Correction(first, 0.5));  // the first correction is applied at once
+    ASSERT_TRUE(AwaitGrid([&](const msg::OccupancyGrid& g) { return g.map_version == first; })) << service->Output();
+    map_pub_->Publish(Correction(second, 0.0));  // the experience back where it was: the wall at 1 m again
+    ASSERT_TRUE(map_pub_->WaitForAcknowledgments(5s));
+    for (uint64_t seq = 11; seq <= 13; ++seq) {  // frames flow; the grid stays on the first correction
+      ASSERT_TRUE(SendFrame(seq, true, second)) << service->Output();
+      const auto grid = AwaitGrid([seq](const msg::OccupancyGrid& g) { return g.header.frame_seq == seq; });
+      ASSERT_TRUE(grid) << service->Output();
+      EXPECT_EQ(grid->map_version, first) << spacing.back();
+    }
+    service->Signal(SIGTERM);
+    const auto last = AwaitGrid([&](const msg::OccupancyGrid& g) { return g.map_version == second; });
+    ASSERT_EQ(service->WaitExit(10s), 0) << service->Output();
+    ASSERT_TRUE(last) << "no grid of the last correction published on the way out\n" << service->Output();
+    EXPECT_TRUE(ShowsWallAhead(*last, kWallX));
 
-  const sim::WorldMap saved = sim::WorldMap::LoadFromYaml((state_dir_.path() / "grid.yaml").string());
-  const auto at = [&saved](double x) { return saved.Classify(saved.WorldToCell({x, 0.0})); };
-  // The cell the wall's face closes (5-cm cells).
-  EXPECT_EQ(at(kWallX - 0.025), sim::CellClass::kOccupied) << "the exported grid's wall is not at 1 m";
-  EXPECT_EQ(at(kWallX + 0.475), sim::CellClass::kUnknown) << "the exported grid still has the wall at 1.5 m";
-  EXPECT_EQ(at(kWallX - 0.4), sim::CellClass::kFree);
+    const sim::WorldMap saved = sim::WorldMap::LoadFromYaml((state_dir_.path() / "grid.yaml").string());
+    const auto at = [&saved](double x) { return saved.Classify(saved.WorldToCell({x, 0.0})); };
+    // The cell the wall's face closes (5-cm cells).
+    EXPECT_EQ(at(kWallX - 0.025), sim::CellClass::kOccupied) << "the exported grid's wall is not at 1 m";
+    EXPECT_EQ(at(kWallX + 0.475), sim::CellClass::kUnknown) << "the exported grid still has the wall at 1.5 m";
+    EXPECT_EQ(at(kWallX - 0.4), sim::CellClass::kFree);
+    std::filesystem::remove(state_dir_.path() / "occupancy.pb");
+  }
 }
 
 TEST_F(OccupancyServiceTest, AcceptsMonoImages) {
