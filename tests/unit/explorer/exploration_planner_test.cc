@@ -643,11 +643,17 @@ TestGrid RoomWithARoundTablesGap() {
   return grid;
 }
 
+// The demo's robot radius (20 cm) and exploration cells (20 cm) for that room.
+ExplorerConfig GapConfig() {
+  ExplorerConfig c = Config();
+  c.robot_radius_m = 0.2;
+  c.coarse_cell_factor = 4;
+  return c;
+}
+
 TEST(ExplorationPlannerTest, LooksIntoUnknownSpaceTheMarginHidesBeforeCallingItComplete) {
   const TestGrid grid = RoomWithARoundTablesGap();
-  ExplorerConfig config = Config();
-  config.robot_radius_m = 0.2;
-  config.coarse_cell_factor = 4;
+  ExplorerConfig config = GapConfig();
   const Pose2D robot{2.0, 1.4, 0.0};
   EXPECT_TRUE(ExplorationPlanner(config).PlanFrom(grid.View(), robot).complete);  // margin_goals off
   config.margin_goals = true;
@@ -697,9 +703,7 @@ TEST(ExplorationPlannerTest, LooksIntoUnknownSpaceTheMarginHidesBeforeCallingItC
 
 TEST(ExplorationPlannerTest, GoesOnOnAFinerGridBeforeCallingItComplete) {
   const TestGrid grid = RoomWithARoundTablesGap();
-  ExplorerConfig config = Config();
-  config.robot_radius_m = 0.2;
-  config.coarse_cell_factor = 4;
+  ExplorerConfig config = GapConfig();
   const Pose2D robot{2.0, 1.4, 0.0};
   EXPECT_TRUE(ExplorationPlanner(config).PlanFrom(grid.View(), robot).complete);
   config.finishing_cell_factor = 2;
