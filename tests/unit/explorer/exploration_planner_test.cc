@@ -676,6 +676,7 @@ TEST(ExplorationPlannerTest, LooksIntoUnknownSpaceTheMarginHidesBeforeCallingItC
       refused.ReportBlocked(p);
     }
     EXPECT_TRUE(p.complete) << p.reason;
+    EXPECT_FALSE(refused.set_aside_goals().empty());
     for (const SetAsideGoal& g : refused.set_aside_goals()) {
       EXPECT_FALSE(g.blocked) << g.reason;
       EXPECT_NE(g.reason.find("refused"), std::string::npos) << g.reason;
@@ -690,6 +691,7 @@ TEST(ExplorationPlannerTest, LooksIntoUnknownSpaceTheMarginHidesBeforeCallingItC
     else at = next.target;
   }
   EXPECT_TRUE(next.complete) << next.reason;
+  EXPECT_FALSE(planner.set_aside_goals().empty());
   for (const SetAsideGoal& g : planner.set_aside_goals())
     EXPECT_NE(g.reason.find("still unknown after a pirouette"), std::string::npos) << g.reason;
   // Once the space beyond the gap is seen free, the robot goes through it (squeezing) to explore on.
