@@ -33,9 +33,10 @@ std::vector<Eigen::Vector2d> MatchedPoints(const OccupancyGrid& grid, const Radi
   return points;
 }
 
-// Occupied: more than one hit's evidence.
-double OccupiedLogOdds(const OccupancyGrid& grid) {
-  return 1.01 * LogOddsFromProbability(grid.sensor_config().hit_probability);
+// Whether a cell is occupied: in the grid, with more than one hit's evidence.
+auto OccupiedIn(const OccupancyGrid& grid) {
+  const double occupied = 1.01 * LogOddsFromProbability(grid.sensor_config().hit_probability);
+  return [&grid, occupied](CellIndex c) { return grid.Contains(c) && grid.LogOdds(c) > occupied; };
 }
 
 bool HasMisplacedShare(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& points, const Pose2D& pose,
@@ -43,7 +44,7 @@ bool HasMisplacedShare(const OccupancyGrid& grid, const std::vector<Eigen::Vecto
   if (points.size() < kMinPoints) return false;
   // Seen free: more than two misses' evidence, net.
   const double seen_free = 2.5 * LogOddsFromProbability(grid.sensor_config().miss_probability);
-  const double occupied = OccupiedLogOdds(grid);
+  const auto is_occupied = OccupiedIn(grid);
   const double cos0 = std::cos(pose.theta), sin0 = std::sin(pose.theta);
   size_t misplaced = 0;
   for (const Eigen::Vector2d& p : points) {
@@ -51,10 +52,7 @@ bool HasMisplacedShare(const OccupancyGrid& grid, const std::vector<Eigen::Vecto
     if (!grid.Contains(c) || grid.LogOdds(c) >= seen_free) continue;
     bool by_obstacle = false;
     for (int dy = -1; dy <= 1 && !by_obstacle; ++dy)
-      for (int dx = -1; dx <= 1 && !by_obstacle; ++dx) {
-        const CellIndex n{c.x + dx, c.y + dy};
-        by_obstacle = grid.Contains(n) && grid.LogOdds(n) > occupied;
-      }
+      for (int dx = -1; dx <= 1 && !by_obstacle; ++dx) by_obstacle = is_occupied({c.x + dx, c.y + dy});
     if (!by_obstacle) ++misplaced;
   }
   return static_cast<double>(misplaced) >= config.min_misplaced_share * static_cast<double>(points.size());
@@ -80,13 +78,11 @@ std::optional<Pose2D> AlignProfile(const OccupancyGrid& grid, const RadialObstac
   const CellIndex centre = grid.CellOf(pose.x, pose.y);
   const int half = static_cast<int>(std::ceil((MatchRange(grid, config) + config.window_m) / res)) + 2;
   const int side = 2 * half + 1, x0 = centre.x - half, y0 = centre.y - half;
-  const double occupied = OccupiedLogOdds(grid);
+  const auto is_occupied = OccupiedIn(grid);
   cv::Mat free_of_obstacles(side, side, CV_8U, cv::Scalar(255));
   for (int y = 0; y < side; ++y)
-    for (int x = 0; x < side; ++x) {
-      const CellIndex c{x0 + x, y0 + y};
-      if (grid.Contains(c) && grid.LogOdds(c) > occupied) free_of_obstacles.at<uint8_t>(y, x) = 0;
-    }
+    for (int x = 0; x < side; ++x)
+      if (is_occupied({x0 + x, y0 + y})) free_of_obstacles.at<uint8_t>(y, x) = 0;
   cv::Mat field;
   cv::distanceTransform(free_of_obstacles, field, cv::DIST_L2, cv::DIST_MASK_5);
   field.forEach<float>([](float& d, const int*) { d = std::exp(-0.5f * d * d); });
