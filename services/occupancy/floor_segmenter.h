@@ -4,7 +4,9 @@
 // colour by more than a tolerance. The seed is the bottom-centre pixel; if its colour is not the
 // floor's (an obstacle right in front of the robot), the bottom row is searched outwards from
 // the centre for a floor-coloured pixel, so the fill never starts inside an obstacle. If no row
-// near the bottom has floor colour, the obstacle fills the view and the mask is empty.
+// near the bottom has floor colour, the obstacle fills the view and the mask is empty. Edge
+// pixels of the floor's colour next to the filled floor are floor too: Canny puts a colour step's
+// edge on either side of it, and on the floor's side the fill would stop a row short.
 
 #include <opencv2/core.hpp>
 #include <optional>

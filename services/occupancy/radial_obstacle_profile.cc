@@ -74,7 +74,7 @@ RadialObstacleProfile RopExtractor::Extract(const cv::Mat& floor_mask) const {
       bin.range_m = ray.range_m.front();
     } else {
       bin.status = BinStatus::kObstacle;
-      bin.range_m = ray.range_m[k];
+      bin.range_m = 0.5f * (ray.range_m[k - 1] + ray.range_m[k]);  // the boundary lies between the two
     }
   }
   return profile;

@@ -2,7 +2,7 @@
 // The Radial Obstacle Profile (ROP) of paper 003 (section 1, Fig. 2; Taylor et al. 2004): for each
 // bearing bin, the range from the robot to the nearest obstacle on a flat floor, found by scanning
 // the floor mask outwards from the robot along that bearing (upwards in the image) until the first
-// non-floor pixel. Bearings where the floor is seen all the way to the scan range are "free to
+// non-floor pixel; the range is halfway between that sample and the last floor one. Bearings where the floor is seen all the way to the scan range are "free to
 // range"; bearings whose nearest visible floor pixel is already not floor are "blind": the
 // obstacle's base lies in the blind area in front of the robot (section 3.1).
 //
