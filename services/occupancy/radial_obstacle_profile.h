@@ -2,9 +2,10 @@
 // The Radial Obstacle Profile (ROP) of paper 003 (section 1, Fig. 2; Taylor et al. 2004): for each
 // bearing bin, the range from the robot to the nearest obstacle on a flat floor, found by scanning
 // the floor mask outwards from the robot along that bearing (upwards in the image) until the first
-// non-floor pixel; the range is halfway between that sample and the last floor one. Bearings where the floor is seen all the way to the scan range are "free to
-// range"; bearings whose nearest visible floor pixel is already not floor are "blind": the
-// obstacle's base lies in the blind area in front of the robot (section 3.1).
+// non-floor pixel; the range is halfway between that sample and the last floor one. Bearings
+// where the floor is seen all the way to the scan range are "free to range"; bearings whose
+// nearest visible floor pixel is already not floor are "blind": the obstacle's base lies in the
+// blind area in front of the robot (section 3.1).
 //
 // RopExtractor precomputes, per bearing bin, the pixels that the floor points at range steps
 // along that bearing fall on (the inverse perspective lookup turned around), so a profile costs one
