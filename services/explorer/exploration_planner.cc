@@ -117,20 +117,18 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
     blocking_obstacles_.push_back(*obstacle);
   }
   if (plan.goal_x < 0) return;
-  if (plan.margin_goal) {  // the way into the margin is narrow: once refused, not tried again
-    SetAside(plan.goal_x, plan.goal_y, "unknown space in the margin: the way to it was refused");
-    return;
-  }
-  // Every max_blocked_attempts refusals set the goal aside (PlanFrom may try it again). On the
+  // Every max_blocked_attempts refusals set the goal aside (PlanFrom may try it again); a goal in
+  // the margin (margin_goals) at the first, for good: the way into the margin is narrow. On the
   // finer grid they count for the cells of the coarse cell holding the goal together: the way to
   // each is mostly the same, and one by one a cluster of small goals behind a gap too narrow for
   // the robot took a demo run's last 100 s.
+  const int strikes = plan.margin_goal ? 1 : config_.max_blocked_attempts;
+  const std::string reason = plan.margin_goal
+                                 ? "unknown space in the margin: the way to it was refused"
+                                 : "look before you move found the way blocked " + std::to_string(strikes) + " times";
   const int k = finishing_ ? FinerPerCoarse() : 1;
   ForEachFinerCell(plan.goal_x / k, plan.goal_y / k, k, [&](int x, int y) {
-    if (++blocked_attempts_[{x, y}] % config_.max_blocked_attempts == 0)
-      SetAside(x, y,
-               "look before you move found the way blocked " + std::to_string(config_.max_blocked_attempts) + " times",
-               true);
+    if (++blocked_attempts_[{x, y}] % strikes == 0) SetAside(x, y, reason, !plan.margin_goal);
   });
 }
 
