@@ -41,12 +41,14 @@ OccupancyGrid::OccupancyGrid(GridConfig grid, SensorModelConfig sensor)
   hit_table_.resize(kUpdateMarker);
   miss_table_.resize(kUpdateMarker);
   blind_table_.resize(kUpdateMarker);
+  percent_table_.resize(kUpdateMarker);
   for (uint32_t v = 0; v < kUpdateMarker; ++v) {
     const double l = ValueToLogOdds(static_cast<uint16_t>(v));
     hit_table_[v] = LogOddsToValue(l + hit) + kUpdateMarker;
     miss_table_[v] = LogOddsToValue(l + miss) + kUpdateMarker;
     // The blind area only says "something is in there": it never overrides evidence.
     blind_table_[v] = (v == kUnknownValue ? LogOddsToValue(blind) : static_cast<uint16_t>(v)) + kUpdateMarker;
+    percent_table_[v] = v == kUnknownValue ? int8_t{-1} : static_cast<int8_t>(std::lround(100.0 * ProbabilityFromLogOdds(l)));
   }
   values_.assign(static_cast<size_t>(grid_.width) * grid_.height, kUnknownValue);
   if (sensor_.footprint_radius_m > 0) footprint_.assign(values_.size(), 0);  // off: no layer
@@ -165,16 +167,13 @@ int64_t OccupancyGrid::InsertProfile(const RadialObstacleProfile& profile, const
 }
 
 std::vector<int8_t> OccupancyGrid::ToRosCells() const {
-  std::vector<int8_t> probability_percent(kUpdateMarker);
-  for (uint32_t v = 0; v < kUpdateMarker; ++v)
-    probability_percent[v] = v == kUnknownValue
-                                 ? int8_t{-1}
-                                 : static_cast<int8_t>(std::lround(100.0 * ProbabilityFromLogOdds(
-                                                                             ValueToLogOdds(static_cast<uint16_t>(v)))));
-  const auto footprint_percent = static_cast<int8_t>(std::lround(100.0 * sensor_.min_probability));
   std::vector<int8_t> out(values_.size());
-  for (size_t i = 0; i < values_.size(); ++i)
-    out[i] = !footprint_.empty() && footprint_[i] ? footprint_percent : probability_percent[values_[i]];
+  std::transform(values_.begin(), values_.end(), out.begin(), [this](uint16_t v) { return percent_table_[v]; });
+  if (!footprint_.empty()) {
+    const auto footprint_percent = static_cast<int8_t>(std::lround(100.0 * sensor_.min_probability));
+    for (size_t i = 0; i < out.size(); ++i)
+      if (footprint_[i]) out[i] = footprint_percent;
+  }
   return out;
 }
 

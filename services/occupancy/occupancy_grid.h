@@ -127,6 +127,7 @@ class OccupancyGrid {
   SensorModelConfig sensor_;
   double log_odds_min_ = 0.0, log_odds_max_ = 0.0;
   std::vector<uint16_t> hit_table_, miss_table_, blind_table_;
+  std::vector<int8_t> percent_table_;  // stored value -> ROS cell (ToRosCells)
   void MarkFootprint(double gx, double gy);
   std::vector<uint16_t> values_;
   std::vector<uint8_t> footprint_;  // 1: a cell within footprint_radius_m of a profile's pose (empty when off)

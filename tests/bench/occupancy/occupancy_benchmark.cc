@@ -32,14 +32,21 @@ RadialObstacleProfile PirouetteProfile(double max_range) {
   return p;
 }
 
+// A 40 m x 40 m grid around the origin (the demo's) of `cell_mm` cells.
+GridConfig DemoGrid(int64_t cell_mm) {
+  const int cells = static_cast<int>(40000 / cell_mm);
+  return GridConfig{cell_mm / 1000.0, cells, cells, -20.0, -20.0};
+}
+
 // Aligning a camera's profile (60 one-degree bins of the pirouette profile, obstacles at 0.9-1.5 m)
-// with the demo's grid (5 cm cells) where the place was seen three times. arg 0: placed where it
-// was taken (only the misplaced-points check runs); arg 1: placed 0.2 m off (the 0.3 m, 0.1 rad
-// search runs: 25 x 25 x 11 poses).
+// with a grid where the place was seen three times. args: 0 placed where it was taken (only the
+// misplaced-points check runs) or 1 placed 0.2 m short of the walls (the 0.3 m, 0.1 rad search runs
+// over whole cells and 0.033 rad, 13 x 13 x 7 poses on 5-cm cells and 25 x 25 x 7 on 2.5-cm ones,
+// then 27 around the best); cell size (mm; the demo's 25).
 void BM_AlignProfile(benchmark::State& state) {
   SensorModelConfig sensor;
   sensor.reliable_range_m = 1.5;
-  OccupancyGrid grid(GridConfig{0.05, 800, 800, -20.0, -20.0}, sensor);
+  OccupancyGrid grid(DemoGrid(state.range(1)), sensor);
   const RadialObstacleProfile all = PirouetteProfile(1.5);
   for (int i = 0; i < 3; ++i) grid.InsertProfile(all, {0.0, 0.0, 0.0});
   RadialObstacleProfile camera = all;
@@ -47,12 +54,12 @@ void BM_AlignProfile(benchmark::State& state) {
   camera.bins.assign(all.bins.begin() + 150, all.bins.begin() + 210);
   ProfileAlignmentConfig config;
   config.window_m = 0.3;
-  const Pose2D placed = state.range(0) ? Pose2D{0.2, 0.0, 0.0} : Pose2D{0.0, 0.0, 0.0};
+  const Pose2D placed = state.range(0) ? Pose2D{-0.2, 0.0, 0.0} : Pose2D{0.0, 0.0, 0.0};
   int64_t moved = 0;
   for (auto _ : state) moved += AlignProfile(grid, camera, placed, config).has_value();
   state.counters["aligned"] = static_cast<double>(moved) / std::max<int64_t>(state.iterations(), 1);
 }
-BENCHMARK(BM_AlignProfile)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_AlignProfile)->Args({0, 50})->Args({1, 50})->Args({0, 25})->Args({1, 25})->Unit(benchmark::kMicrosecond);
 
 // args: cell size (mm), reliable range (cm)
 void BM_GridInsertProfile(benchmark::State& state) {
@@ -72,6 +79,22 @@ void BM_GridInsertProfile(benchmark::State& state) {
   state.counters["cells_per_profile"] = static_cast<double>(cells) / std::max(i, 1);
 }
 BENCHMARK(BM_GridInsertProfile)->Args({10, 40})->Args({10, 200})->Args({40, 400});
+
+// The grid as published (ROS cells, every grid_publish_every_n_frames frames on the frame's
+// thread). arg: cell size (mm) of the demo's 40 m x 40 m grid.
+void BM_GridToRosCells(benchmark::State& state) {
+  SensorModelConfig sensor;
+  sensor.reliable_range_m = 1.5;
+  OccupancyGrid grid(DemoGrid(state.range(0)), sensor);
+  const RadialObstacleProfile profile = PirouetteProfile(1.5);
+  for (int i = 0; i < 200; ++i) grid.InsertProfile(profile, {std::fmod(i * 0.37, 10.0), std::fmod(i * 0.53, 8.0), i * 0.1});
+  for (auto _ : state) {
+    std::vector<int8_t> cells = grid.ToRosCells();
+    benchmark::DoNotOptimize(cells.data());
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(grid.width()) * grid.height());
+}
+BENCHMARK(BM_GridToRosCells)->Arg(50)->Arg(25)->Unit(benchmark::kMillisecond);
 
 struct Pipeline {
   CameraConfig camera;
@@ -108,11 +131,11 @@ void BM_RopFromRawFrameWithCorrection(benchmark::State& state) {
 BENCHMARK(BM_RopFromRawFrameWithCorrection)->Unit(benchmark::kMicrosecond);
 
 // n frame-like profiles (70 bins over 1.2 rad, walls 1-2 m away) on 100 experiences scattered over
-// a 10 m x 8 m room, in the demo's grid (800 x 800 cells of 5 cm).
-AnchoredProfileMap DemoSizedMap(int n) {
+// a 10 m x 8 m room, in a 40 m x 40 m grid of `cell_mm` cells (the demo's: 25).
+AnchoredProfileMap DemoSizedMap(int n, int64_t cell_mm) {
   SensorModelConfig sensor;
   sensor.reliable_range_m = 2.0;
-  AnchoredProfileMap map(GridConfig{0.05, 800, 800, -20.0, -20.0}, sensor);
+  AnchoredProfileMap map(DemoGrid(cell_mm), sensor);
   RadialObstacleProfile frame;
   frame.first_bearing_rad = -0.6;
   frame.bin_width_rad = 1.2 / 70;
@@ -128,8 +151,9 @@ AnchoredProfileMap DemoSizedMap(int n) {
 
 std::optional<Pose2D> Shifted(uint64_t id) { return Pose2D{0.01 * static_cast<double>(id), 0.02, 0.001}; }
 
+// args: profiles, cell size (mm)
 void BM_AnchoredProfileMapReplay(benchmark::State& state) {
-  AnchoredProfileMap map = DemoSizedMap(static_cast<int>(state.range(0)));
+  AnchoredProfileMap map = DemoSizedMap(static_cast<int>(state.range(0)), state.range(1));
   AnchoredProfileMap::RebuildPlan plan = map.PlanRebuild(Shifted);
   for (auto _ : state) {
     OccupancyGrid grid = AnchoredProfileMap::Replay(plan);
@@ -137,11 +161,13 @@ void BM_AnchoredProfileMapReplay(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
-BENCHMARK(BM_AnchoredProfileMapReplay)->Arg(1000)->Arg(10000)->Arg(20000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AnchoredProfileMapReplay)
+    ->ArgsProduct({{1000, 10000, 20000}, {50, 25}})
+    ->Unit(benchmark::kMillisecond);
 
 // What a rebuild leaves on the frame's thread: the plan and the adopt of a replayed grid.
 void BM_AnchoredProfileMapPlanAndAdopt(benchmark::State& state) {
-  AnchoredProfileMap map = DemoSizedMap(static_cast<int>(state.range(0)));
+  AnchoredProfileMap map = DemoSizedMap(static_cast<int>(state.range(0)), state.range(1));
   AnchoredProfileMap::RebuildPlan first = map.PlanRebuild(Shifted);
   const OccupancyGrid replayed = AnchoredProfileMap::Replay(first);
   for (auto _ : state) {
@@ -151,7 +177,9 @@ void BM_AnchoredProfileMapPlanAndAdopt(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
-BENCHMARK(BM_AnchoredProfileMapPlanAndAdopt)->Arg(1000)->Arg(10000)->Arg(20000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AnchoredProfileMapPlanAndAdopt)
+    ->ArgsProduct({{1000, 10000, 20000}, {50, 25}})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace rslam::occupancy

@@ -46,10 +46,16 @@ std::vector<Pose2D> SeenFrom() {
   return poses;
 }
 
-OccupancyGrid SeenGrid() {
+// A 10 m grid of `resolution` cells around the corner.
+GridConfig GridOf(double resolution) {
+  const int cells = static_cast<int>(std::lround(10.0 / resolution));
+  return GridConfig{resolution, cells, cells, -5.0, -5.0};
+}
+
+OccupancyGrid SeenGrid(double resolution) {
   SensorModelConfig sensor;
   sensor.reliable_range_m = 1.5;
-  OccupancyGrid grid(GridConfig{0.05, 200, 200, -5.0, -5.0}, sensor);
+  OccupancyGrid grid(GridOf(resolution), sensor);
   for (const Pose2D& seen : SeenFrom()) grid.InsertProfile(ProfileAt(seen), seen);
   return grid;
 }
@@ -60,8 +66,13 @@ ProfileAlignmentConfig On() {
   return c;
 }
 
-TEST(ProfileAlignmentTest, AProfileDrawnOffTheWallsSeenBeforeIsMovedBackOntoThem) {
-  const OccupancyGrid grid = SeenGrid();
+// On the 0.05-m cells the search was tuned on and on the demo's 0.025-m ones (its steps, field and
+// reach are in cells: finer cells search finer).
+class ProfileAlignmentOnCellsOf : public ::testing::TestWithParam<double> {};
+INSTANTIATE_TEST_SUITE_P(Metres, ProfileAlignmentOnCellsOf, ::testing::Values(0.05, 0.025));
+
+TEST_P(ProfileAlignmentOnCellsOf, AProfileDrawnOffTheWallsSeenBeforeIsMovedBackOntoThem) {
+  const OccupancyGrid grid = SeenGrid(GetParam());
   const Pose2D truth{0.7, 0.1, 0.75};
   const RadialObstacleProfile profile = ProfileAt(truth);
   // The map puts the robot 0.2 m off and turned 0.05 rad: its walls would land on seen floor.
@@ -87,7 +98,7 @@ TEST(ProfileAlignmentTest, AProfileDrawnOffTheWallsSeenBeforeIsMovedBackOntoThem
 }
 
 TEST(ProfileAlignmentTest, AProfileOfAPlaceNotSeenBeforeIsNotMovedOntoOtherWalls) {
-  const OccupancyGrid grid = SeenGrid();
+  const OccupancyGrid grid = SeenGrid(0.05);
   // Facing away from the corner at a wall the grid has not seen (x = -0.6): its points fall on
   // unknown cells, however far off the map may have put it.
   const std::vector<Wall> other = {{{-0.6, -2.0}, {-0.6, 2.0}}};
@@ -101,10 +112,10 @@ TEST(ProfileAlignmentTest, AProfileOfAPlaceNotSeenBeforeIsNotMovedOntoOtherWalls
   EXPECT_FALSE(AlignProfile(grid, few, {0.55, 0.0, 0.8}, On()));
 }
 
-TEST(ProfileAlignmentTest, ARebuildAlignsAMisplacedProfileAndSearchesAgainOnlyWhereItMoved) {
+TEST_P(ProfileAlignmentOnCellsOf, ARebuildAlignsAMisplacedProfileAndSearchesAgainOnlyWhereItMoved) {
   SensorModelConfig sensor;
   sensor.reliable_range_m = 1.5;
-  const GridConfig grid{0.05, 200, 200, -5.0, -5.0};
+  const GridConfig grid = GridOf(GetParam());
   const Pose2D truth{0.7, 0.1, 0.75}, placed{0.55, -0.02, 0.8};
   const auto fill = [&](AnchoredProfileMap& map) {
     for (const Pose2D& seen : SeenFrom()) map.AddProfile(1, {0, 0, 0}, seen, ProfileAt(seen));
@@ -139,10 +150,14 @@ TEST(ProfileAlignmentTest, ARebuildAlignsAMisplacedProfileAndSearchesAgainOnlyWh
   map.Rebuild(keep);  // nothing moved: the same correction
   EXPECT_EQ(map.AlignedProfiles(), 1u);
   EXPECT_EQ(drawn(map.profiles().back()).x, first.x);
+  // The map moves experience 2 by less than a cell: not searched again.
+  const auto moved_by = [](double dx) {
+    return [dx](uint64_t id) { return id == 2 ? std::optional<Pose2D>(Pose2D{dx, 0.0, 0.0}) : std::nullopt; };
+  };
+  map.Rebuild(moved_by(0.8 * GetParam()));
+  EXPECT_EQ(map.profiles().back().alignment.searched_from->x, placed.x);
   // The map corrects experience 2 by 10 cm: searched again from there, drawn where it was taken.
-  map.Rebuild([](uint64_t id) -> std::optional<Pose2D> {
-    return id == 2 ? std::optional<Pose2D>(Pose2D{0.1, 0.0, 0.0}) : std::nullopt;
-  });
+  map.Rebuild(moved_by(0.1));
   const Pose2D again = drawn(map.profiles().back());
   EXPECT_EQ(map.profiles().back().alignment.searched_from->x, placed.x + 0.1);
   EXPECT_LT(std::hypot(again.x - truth.x, again.y - truth.y), 0.05);
