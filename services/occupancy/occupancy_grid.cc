@@ -48,7 +48,8 @@ OccupancyGrid::OccupancyGrid(GridConfig grid, SensorModelConfig sensor)
     miss_table_[v] = LogOddsToValue(l + miss) + kUpdateMarker;
     // The blind area only says "something is in there": it never overrides evidence.
     blind_table_[v] = (v == kUnknownValue ? LogOddsToValue(blind) : static_cast<uint16_t>(v)) + kUpdateMarker;
-    percent_table_[v] = v == kUnknownValue ? int8_t{-1} : static_cast<int8_t>(std::lround(100.0 * ProbabilityFromLogOdds(l)));
+    percent_table_[v] =
+        v == kUnknownValue ? int8_t{-1} : static_cast<int8_t>(std::lround(100.0 * ProbabilityFromLogOdds(l)));
   }
   values_.assign(static_cast<size_t>(grid_.width) * grid_.height, kUnknownValue);
   if (sensor_.footprint_radius_m > 0) footprint_.assign(values_.size(), 0);  // off: no layer

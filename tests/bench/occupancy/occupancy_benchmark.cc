@@ -59,7 +59,7 @@ void BM_AlignProfile(benchmark::State& state) {
   for (auto _ : state) moved += AlignProfile(grid, camera, placed, config).has_value();
   state.counters["aligned"] = static_cast<double>(moved) / std::max<int64_t>(state.iterations(), 1);
 }
-BENCHMARK(BM_AlignProfile)->Args({0, 50})->Args({1, 50})->Args({0, 25})->Args({1, 25})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_AlignProfile)->ArgsProduct({{0, 1}, {50, 25}})->Unit(benchmark::kMicrosecond);
 
 // args: cell size (mm), reliable range (cm)
 void BM_GridInsertProfile(benchmark::State& state) {
@@ -87,7 +87,8 @@ void BM_GridToRosCells(benchmark::State& state) {
   sensor.reliable_range_m = 1.5;
   OccupancyGrid grid(DemoGrid(state.range(0)), sensor);
   const RadialObstacleProfile profile = PirouetteProfile(1.5);
-  for (int i = 0; i < 200; ++i) grid.InsertProfile(profile, {std::fmod(i * 0.37, 10.0), std::fmod(i * 0.53, 8.0), i * 0.1});
+  for (int i = 0; i < 200; ++i)
+    grid.InsertProfile(profile, {std::fmod(i * 0.37, 10.0), std::fmod(i * 0.53, 8.0), i * 0.1});
   for (auto _ : state) {
     std::vector<int8_t> cells = grid.ToRosCells();
     benchmark::DoNotOptimize(cells.data());
