@@ -156,6 +156,10 @@ class ExplorerNode::Controller {
       context_.Reject("grid", problem);
       return;
     }
+    if (!grid_ || grid_->resolution_m != grid.resolution_m)
+      spdlog::info("exploring on {:.3f}-m cells: coarse_cell_factor {} x the grid's {:.3f}-m cells",
+                   grid.resolution_m * config_.planner.coarse_cell_factor, config_.planner.coarse_cell_factor,
+                   grid.resolution_m);
     grid_ = grid;
     fresh_grid_needed_ = false;
     Step();
