@@ -45,6 +45,7 @@ TEST(ShippedGridTest, WallsDrawnOnTheTruePosesLeaveTheFloorBesideThemFree) {
   published.origin_x_m = config.grid.origin_x_m;
   published.origin_y_m = config.grid.origin_y_m;
   published.cells = grid.ToRosCells();
+  // The floor the simulator's robot (radius 0.18 m) can reach from the start, as the demo judges.
   const GridComparison check = CompareGridWithWorld(world, ReachableFootprint(world, start, 0.18), map_origin,
                                                     published, world.resolution());
   EXPECT_GT(check.coverage, 0.985) << check.missed_occupied_cells << " reachable cells marked occupied, "
