@@ -267,17 +267,10 @@ class OccupancyNode::Mapper {
 
   void PublishGrid(const msg::Header& header, uint64_t map_version) {
     frames_since_grid_ = 0;
-    const OccupancyGrid& grid = map_.grid();
-    msg::OccupancyGrid out;
+    msg::OccupancyGrid out = GridToMessage(map_.grid());
     out.header = header;
     if (out.header.robot_id.empty()) out.header.robot_id = context_.robot_id();
     out.map_version = map_version;
-    out.width = static_cast<uint32_t>(grid.width());
-    out.height = static_cast<uint32_t>(grid.height());
-    out.resolution_m = static_cast<float>(grid.grid_config().resolution_m);
-    out.origin_x_m = grid.grid_config().origin_x_m;
-    out.origin_y_m = grid.grid_config().origin_y_m;
-    out.cells = grid.ToRosCells();
     grid_pub_->Publish(out);
   }
 

@@ -66,4 +66,15 @@ RadialObstacleProfile ProfileFromMessage(const msg::ObstacleProfile& message) {
   return rop;
 }
 
+msg::OccupancyGrid GridToMessage(const OccupancyGrid& grid) {
+  msg::OccupancyGrid out{};
+  out.width = static_cast<uint32_t>(grid.width());
+  out.height = static_cast<uint32_t>(grid.height());
+  out.resolution_m = static_cast<float>(grid.grid_config().resolution_m);
+  out.origin_x_m = grid.grid_config().origin_x_m;
+  out.origin_y_m = grid.grid_config().origin_y_m;
+  out.cells = grid.ToRosCells();
+  return out;
+}
+
 }  // namespace rslam::occupancy

@@ -8,8 +8,10 @@
 #include "services/occupancy/obstacle_profile_pipeline.h"
 #include "services/occupancy/occupancy_grid.h"
 #include "services/occupancy/occupancy_node_config.h"
+#include "services/occupancy/profile_message.h"
 #include "tools/demo/demo_metrics.h"
 #include "tools/sim/camera_renderer.h"
+#include "tools/sim/sim_node.h"
 #include "tools/sim/world_map.h"
 
 namespace rslam::demo {
@@ -19,16 +21,20 @@ TEST(ShippedGridTest, WallsDrawnOnTheTruePosesLeaveTheFloorBesideThemFree) {
   // A wall's hit lands in the cell holding the wall's face, which reaches up to a cell into the
   // floor: with 0.05-m cells that band alone cost 1.5 points of coverage (0.974; 0.989 with
   // 0.025-m cells, 0.995 with 0.02) at the same precision.
+  // The demo's simulator (world, scene, camera, robot) and mapper.
+  const YAML::Node demo = LoadYamlFile(RSLAM_SOURCE_DIR "/deploy/config/demo.yaml");
+  sim::SimNodeConfig sim;
+  LoadConfigSection(demo, "sim", sim);
   occupancy::OccupancyNodeConfig config;
-  LoadConfigSection(LoadYamlFile(RSLAM_SOURCE_DIR "/deploy/config/demo.yaml"), "occupancy", config);
-  const sim::WorldMap world = sim::WorldMap::LoadFromYaml(RSLAM_SOURCE_DIR "/deploy/worlds/uwb-room.yaml");
-  sim::CameraRenderer renderer(world, sim::SceneConfig{}, sim::CameraConfig{});
+  LoadConfigSection(demo, "occupancy", config);
+  const sim::WorldMap world = sim::WorldMap::LoadFromYaml(sim::ResolveWorldPath(sim.sim.world_yaml));
+  sim::CameraRenderer renderer(world, sim.sim.scene, sim.sim.camera);
   const occupancy::ObstacleProfilePipeline pipeline(config.pipeline);
   occupancy::OccupancyGrid grid(config.grid, config.sensor);
 
   // The map frame at the start, turned (as the demo's map is; the world's cells then cut the
   // grid's at an angle, as in a run).
-  const Pose2D start = world.DefaultStartPose();
+  const Pose2D start = sim::StartPoseOf(sim, world);
   const Pose2D map_origin{start.x, start.y, start.theta + 0.3};
   const std::vector<Eigen::Vector2i> poses = world.ReachableFreeCells({start.x, start.y}, 0.2);
   ASSERT_GT(poses.size(), 1000u);
@@ -38,16 +44,9 @@ TEST(ShippedGridTest, WallsDrawnOnTheTruePosesLeaveTheFloorBesideThemFree) {
     grid.InsertProfile(pipeline.ProfileFromImage(renderer.Render(seen_from, k)), Between(map_origin, seen_from));
   }
 
-  msg::OccupancyGrid published{};
-  published.width = static_cast<uint32_t>(grid.width());
-  published.height = static_cast<uint32_t>(grid.height());
-  published.resolution_m = static_cast<float>(config.grid.resolution_m);
-  published.origin_x_m = config.grid.origin_x_m;
-  published.origin_y_m = config.grid.origin_y_m;
-  published.cells = grid.ToRosCells();
-  // The floor the simulator's robot (radius 0.18 m) can reach from the start, as the demo judges.
-  const GridComparison check = CompareGridWithWorld(world, ReachableFootprint(world, start, 0.18), map_origin,
-                                                    published, world.resolution());
+  const GridComparison check =
+      CompareGridWithWorld(world, ReachableFootprint(world, start, sim.sim.motion.robot_radius_m), map_origin,
+                           occupancy::GridToMessage(grid), world.resolution());
   EXPECT_GT(check.coverage, 0.985) << check.missed_occupied_cells << " reachable cells marked occupied, "
                                    << check.missed_uncertain_cells << " uncertain, " << check.missed_unknown_cells
                                    << " unknown";
