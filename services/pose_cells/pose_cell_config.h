@@ -30,7 +30,7 @@ struct PoseCellConfig {
   // exp_boundary_max_offset_m, make a new experience instead. Needs the odometry's floor
   // boundary (odometry/velocity, floor_odometry); an experience or frame without one (adopted
   // from the map after a restart, a frame without odometry) is not checked. The service keeps
-  // the boundaries only while the check or exp_boundary_offset is on.
+  // the boundaries only while the check, exp_boundary_offset or exp_submap_offset is on.
   bool exp_boundary_check = false;
   int exp_boundary_min_age_frames = 500;
   int exp_boundary_min_points = 8;
@@ -52,6 +52,18 @@ struct PoseCellConfig {
   bool exp_view_offset = false;
   int exp_view_offset_frames = 80;
   int exp_view_offset_max_gap_frames = 100;
+  // Not OpenRatSLAM's: a link or set to an experience made exp_submap_min_age_frames frames or
+  // more before takes where the robot stands from the walls of both visits when they register
+  // as exp_boundary_check requires (boundary_match.h): the floor boundaries of the experiences
+  // made within exp_submap_frames frames of the recognised one, and those of the last
+  // exp_submap_frames frames, each set placed by the odometry of its own visit. One frame's
+  // boundary is a few metres of wall ahead, which slides along a corridor; the walls passed
+  // before and after pin the offset across it. Takes precedence over exp_view_offset, whose
+  // offset to an old place is mostly the robot on it (its best view is the frame that
+  // recognised it) however far beside it the robot drives this time.
+  bool exp_submap_offset = false;
+  int exp_submap_min_age_frames = 150;
+  int exp_submap_frames = 30;
 
   template <class V>
   void VisitFields(V& v) {
@@ -89,6 +101,12 @@ struct PoseCellConfig {
       "exp_view_offset looks for the best view match in this many last frames");
     v("exp_view_offset_max_gap_frames", exp_view_offset_max_gap_frames,
       "exp_view_offset relates that view's experience to the recognised one only if made within this many frames of it");
+    v("exp_submap_offset", exp_submap_offset,
+      "a link or set to an old experience carries the offset that registers both visits' floor boundaries");
+    v("exp_submap_min_age_frames", exp_submap_min_age_frames,
+      "exp_submap_offset applies to experiences made at least this many frames ago");
+    v("exp_submap_frames", exp_submap_frames,
+      "exp_submap_offset registers the boundaries of this many frames around each visit");
   }
 
   void Validate() const {
@@ -116,6 +134,8 @@ struct PoseCellConfig {
     Require(exp_boundary_max_offset_m > 0, "exp_boundary_max_offset_m", "must be positive");
     Require(exp_view_offset_frames >= 1, "exp_view_offset_frames", "must be at least 1");
     Require(exp_view_offset_max_gap_frames >= 0, "exp_view_offset_max_gap_frames", "must be non-negative");
+    Require(exp_submap_min_age_frames >= 0, "exp_submap_min_age_frames", "must be non-negative");
+    Require(exp_submap_frames >= 0, "exp_submap_frames", "must be non-negative");
   }
 };
 

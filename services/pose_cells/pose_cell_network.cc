@@ -9,6 +9,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 #include <utility>
 
 #if defined(__x86_64__)
@@ -822,6 +823,58 @@ std::optional<Eigen::Vector2d> PoseCellNetwork::ViewOffset(uint32_t recognised) 
   return Eigen::Vector2d(offset.x, offset.y);
 }
 
+namespace {
+
+// Appends the points, taken into another frame by `pose`, that fall in a 4-cm cell no point
+// before them took: the walls of thirty frames overlap, and the registration's cost grows with
+// the product of the two sides' points.
+void AppendThinned(const Pose2D& pose, const FloorBoundary& points, std::unordered_set<uint64_t>& taken,
+                   FloorBoundary& out) {
+  constexpr double kCellM = 0.04;
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  for (const Eigen::Vector2f& p : points) {
+    const double x = pose.x + c * p.x() - s * p.y(), y = pose.y + s * p.x() + c * p.y();
+    const auto cx = static_cast<uint32_t>(static_cast<int32_t>(std::floor(x / kCellM)));
+    const auto cy = static_cast<uint32_t>(static_cast<int32_t>(std::floor(y / kCellM)));
+    if (taken.insert(uint64_t{cx} << 32 | cy).second) out.emplace_back(static_cast<float>(x), static_cast<float>(y));
+  }
+}
+
+}  // namespace
+
+std::optional<BoundaryMatch> PoseCellNetwork::MatchSubmaps(uint32_t recognised) const {
+  const ExperienceCell& e = experiences_[recognised];
+  if (!e.odometry) return std::nullopt;
+  const auto window = static_cast<uint64_t>(config_.exp_submap_frames);
+  auto near = [&](const ExperienceCell& c) {
+    return c.odometry && (c.created_frame > e.created_frame ? c.created_frame - e.created_frame
+                                                            : e.created_frame - c.created_frame) <= window;
+  };
+  // Experiences are numbered in the order made: the visit's are those either side of it.
+  uint32_t first = recognised, last = recognised;
+  while (first > 0 && near(experiences_[first - 1])) --first;
+  while (last + 1 < experiences_.size() && near(experiences_[last + 1])) ++last;
+  FloorBoundary then, now;
+  std::unordered_set<uint64_t> taken;
+  for (uint32_t id = first; id <= last; ++id) {
+    const ExperienceCell& c = experiences_[id];
+    if (c.boundary) AppendThinned(Between(*e.odometry, *c.odometry), *c.boundary, taken, then);
+  }
+  taken.clear();
+  for (const RecentBoundary& r : recent_boundaries_) AppendThinned(Between(odometry_, r.odometry), r.points, taken, now);
+  const size_t min_points = static_cast<size_t>(config_.exp_boundary_min_points);
+  if (then.size() < min_points || now.size() < min_points) return std::nullopt;
+  return RegisterBoundaries(then, now);
+}
+
+void PoseCellNetwork::RememberBoundary(const FloorBoundary* boundary) {
+  if (!config_.exp_submap_offset) return;
+  if (boundary) recent_boundaries_.push_back({frames_processed_, odometry_, *boundary});
+  while (!recent_boundaries_.empty() &&
+         frames_processed_ - recent_boundaries_.front().frame > static_cast<uint64_t>(config_.exp_submap_frames))
+    recent_boundaries_.pop_front();
+}
+
 bool PoseCellNetwork::BoundaryAligns(const BoundaryMatch& match) const {
   return match.median_residual_m < config_.exp_boundary_max_residual_m &&
          match.offset_m() < config_.exp_boundary_max_offset_m;
@@ -877,7 +930,12 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
         create();
         action.refused_link_to = matched;
       } else {
-        const std::optional<Eigen::Vector2d> measured = config_.exp_view_offset ? ViewOffset(matched) : std::nullopt;
+        std::optional<Eigen::Vector2d> measured = config_.exp_view_offset ? ViewOffset(matched) : std::nullopt;
+        if (config_.exp_submap_offset && frames_processed_ - experiences_[matched].created_frame >=
+                                             static_cast<uint64_t>(config_.exp_submap_min_age_frames)) {
+          const std::optional<BoundaryMatch> walls = MatchSubmaps(matched);
+          if (walls && BoundaryAligns(*walls)) measured = walls->pose.head<2>();
+        }
         if (measured) {
           action.offset_x_m = measured->x();
           action.offset_y_m = measured->y();
@@ -919,6 +977,7 @@ Action PoseCellNetwork::ProcessFrame(double vtrans_mps, double vrot_radps, doubl
     if (recent_views_.size() > static_cast<size_t>(config_.exp_view_offset_frames)) recent_views_.pop_front();
   }
   ++frames_processed_;
+  RememberBoundary(boundary);
   return DecideAction(boundary);
 }
 
@@ -938,6 +997,7 @@ Action PoseCellNetwork::ProcessFrameWithoutView(double vtrans_mps, double vrot_r
   Step(vtrans_mps, vrot_radps, dt_s);
   DeadReckon(vtrans_mps * dt_s, vrot_radps * dt_s);
   ++frames_processed_;
+  RememberBoundary(boundary);
   // The view is unchanged: only the pose-cell distance can make a new experience.
   previous_template_ = current_template_;
   has_previous_template_ = has_current_template_;
@@ -1111,6 +1171,15 @@ proto::State PoseCellNetwork::SaveState() const {
     pv->set_difference(v.difference);
     SavePose(v.odometry, pv->mutable_odometry());
   }
+  for (const RecentBoundary& b : recent_boundaries_) {
+    auto* pb = s.add_recent_boundaries();
+    pb->set_frame(b.frame);
+    SavePose(b.odometry, pb->mutable_odometry());
+    for (const Eigen::Vector2f& p : b.points) {
+      pb->add_xy(p.x());
+      pb->add_xy(p.y());
+    }
+  }
   SavePose(odometry_, s.mutable_odometry());
   for (uint32_t a = 0; a < links_of_.size(); ++a) {
     for (uint32_t b : links_of_[a]) {
@@ -1185,6 +1254,13 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
     if (!std::isfinite(v.difference()) || v.difference() < 0 || !IsFinite(LoadPose(v.odometry())))
       fail("recent view not finite");
   }
+  for (const auto& b : s.recent_boundaries()) {
+    if (b.frame() > s.frames_processed()) fail("recent boundary seen after the last frame");
+    if (b.xy_size() % 2 != 0) fail("recent boundary is not a list of points");
+    for (float v : b.xy())
+      if (!std::isfinite(v)) fail("recent boundary point not finite");
+    if (!IsFinite(LoadPose(b.odometry()))) fail("recent boundary odometry pose not finite");
+  }
   if (!IsFinite(LoadPose(s.odometry()))) fail("odometry pose not finite");
   for (const auto& l : s.links()) {
     if (l.from_experience_id() >= n_exps || l.to_experience_id() >= n_exps) fail("link to unknown experience");
@@ -1226,6 +1302,12 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   recent_views_.clear();
   for (const auto& v : s.recent_views()) recent_views_.push_back({v.template_id(), v.difference(), LoadPose(v.odometry())});
   while (recent_views_.size() > static_cast<size_t>(config_.exp_view_offset_frames)) recent_views_.pop_front();
+  recent_boundaries_.clear();
+  for (const auto& b : s.recent_boundaries()) {
+    FloorBoundary points;
+    for (int i = 0; i + 1 < b.xy_size(); i += 2) points.emplace_back(b.xy(i), b.xy(i + 1));
+    recent_boundaries_.push_back({b.frame(), LoadPose(b.odometry()), std::move(points)});
+  }
   odometry_ = LoadPose(s.odometry());
   links_of_.assign(n_exps, {});
   for (const auto& l : s.links()) {

@@ -182,6 +182,12 @@ class PoseCellNetwork {
   // The two views' floor boundaries registered (boundary_match.h) when both are known and hold
   // exp_boundary_min_points points; nullopt otherwise.
   std::optional<BoundaryMatch> MatchBoundary(const ExperienceCell& e, const FloorBoundary* boundary) const;
+  // exp_submap_offset: the boundaries of the experiences made within exp_submap_frames frames of
+  // `recognised` registered with those of the last exp_submap_frames frames; nullopt when either
+  // side holds fewer than exp_boundary_min_points points.
+  std::optional<BoundaryMatch> MatchSubmaps(uint32_t recognised) const;
+  // Keeps the frame's boundary (exp_submap_offset) and forgets those older than exp_submap_frames.
+  void RememberBoundary(const FloorBoundary* boundary);
   bool BoundaryAligns(const BoundaryMatch& match) const;
   // Active indices along one axis: sorted list, membership mask, and maximal contiguous runs
   // [begin, end) (not wrapping), so inner loops over x are plain vectorisable ranges.
@@ -287,6 +293,12 @@ class PoseCellNetwork {
   uint64_t view_updates_ = 0;
   Pose2D odometry_;  // dead-reckoned pose of the odometry this network integrated (exp_view_offset)
   std::deque<RecentView> recent_views_;  // the last exp_view_offset_frames, oldest first
+  struct RecentBoundary {
+    uint64_t frame;    // frames_processed_ at it
+    Pose2D odometry;   // odometry_ at it
+    FloorBoundary points;
+  };
+  std::deque<RecentBoundary> recent_boundaries_;  // within the last exp_submap_frames, oldest first
   std::vector<double> avg_x_, avg_y_, avg_th_;  // population-vector sums, preallocated
   std::vector<float> padded_row_;               // ConvolveX scratch: one row with wrapped margins
 };

@@ -180,9 +180,10 @@ class PoseCellsNode::Processor {
     }
     if (bridge_pending_) BridgeMissedFrames(frame.frame_seq, header.stamp_ns, dt);
     if (relocalise_frames_left_ > 0) Relocalise(frame.frame_seq, view);
-    // The boundary matters only to the check and the offset: without them nothing is converted or kept.
+    // The boundary matters only to the check and the offsets: without them nothing is converted or kept.
     const FloorBoundary* seen = nullptr;
-    if ((config_.network.exp_boundary_check || config_.network.exp_boundary_offset) && frame.velocity &&
+    const PoseCellConfig& net = config_.network;
+    if ((net.exp_boundary_check || net.exp_boundary_offset || net.exp_submap_offset) && frame.velocity &&
         frame.velocity->boundary_measured) {
       boundary_.clear();
       for (const msg::FloorPoint& p : frame.velocity->boundary) boundary_.emplace_back(p.x_m, p.y_m);

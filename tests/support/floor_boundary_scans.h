@@ -37,4 +37,28 @@ inline std::vector<Eigen::Vector2f> CorridorScan() {
   return points;
 }
 
+// Walls as segments (x0, y0, x1, y1), world frame, metres.
+struct Wall {
+  double x0, y0, x1, y1;
+};
+
+// What a robot at (x, y) facing theta sees of the walls: the nearest along each degree's ray.
+inline std::vector<Eigen::Vector2f> ScanOfWalls(const std::vector<Wall>& walls, double x, double y, double theta) {
+  std::vector<Eigen::Vector2f> points;
+  for (int deg = -30; deg <= 30; ++deg) {
+    const double b = deg * std::numbers::pi / 180.0, dx = std::cos(theta + b), dy = std::sin(theta + b);
+    double r = 3.0;
+    for (const Wall& w : walls) {
+      // x + t d = p0 + u (p1 - p0), t > 0, 0 <= u <= 1.
+      const double ex = w.x1 - w.x0, ey = w.y1 - w.y0, den = dx * ey - dy * ex;
+      if (std::abs(den) < 1e-12) continue;
+      const double t = ((w.x0 - x) * ey - (w.y0 - y) * ex) / den;
+      const double u = ((w.x0 - x) * dy - (w.y0 - y) * dx) / den;
+      if (t > 0 && u >= 0 && u <= 1) r = std::min(r, t);
+    }
+    if (r < 3.0) points.emplace_back(static_cast<float>(r * std::cos(b)), static_cast<float>(r * std::sin(b)));
+  }
+  return points;
+}
+
 }  // namespace rslam::testing

@@ -279,6 +279,8 @@ struct SquareDrive {
 
 using testing::CornerScan;
 using testing::CorridorScan;
+using testing::ScanOfWalls;
+using testing::Wall;
 
 TEST(PoseCellNetwork, SquareLoopEmitsCreatesThenLinkToFirstExperience) {
   PoseCellConfig cfg = SmallConfig();
@@ -435,6 +437,52 @@ TEST(PoseCellNetwork, ViewOffsetSaysWhereThePlaceWasRecognisedFromTheBestViewAnd
   }
 }
 
+// exp_submap_offset: a room with a pillar on its south wall; the robot drives 4 m east, round a
+// 4 x 2 m loop, and along the first pass again 0.3 m to its north, each place recognised from the
+// frame that sees its view best. The view's offset puts the robot on the place; the walls of both
+// passes (30 frames around each) say it stands 0.3 m to its left. Places younger than
+// exp_submap_min_age_frames, or the key off, keep the view's offset.
+TEST(PoseCellNetwork, SubmapOffsetTakesTheWallsOfBothVisitsOverTheView) {
+  const std::vector<Wall> room = {{-1.5, -1.0, 5.5, -1.0}, {5.5, -1.0, 5.5, 3.0}, {5.5, 3.0, -1.5, 3.0},
+                                  {-1.5, 3.0, -1.5, -1.0}, {2.0, -1.0, 2.0, -0.6}, {2.0, -0.6, 2.4, -0.6},
+                                  {2.4, -0.6, 2.4, -1.0}};
+  struct Case {
+    bool on;
+    int min_age;
+    bool beside;  // the offsets expected: 0.3 m beside the place, else the view's (on it)
+  };
+  for (const Case& c : {Case{true, 10, true}, Case{true, 1000, false}, Case{false, 10, false}}) {
+    PoseCellConfig cfg = SmallConfig();
+    cfg.exp_view_offset = true;
+    cfg.exp_submap_offset = c.on;
+    cfg.exp_submap_min_age_frames = c.min_age;
+    PoseCellNetwork net(cfg);
+    Pose2D truth;  // the odometry reads the motion exactly: the network's odometry frame is the world's
+    uint32_t next = 0;
+    auto drive = [&](double d, double turn, uint32_t tid, bool is_new) {
+      truth = Compose(truth, {d, 0.0, turn});
+      const FloorBoundary seen = ScanOfWalls(room, truth.x, truth.y, truth.theta);
+      return net.ProcessFrame(d, turn, 1.0, {tid, is_new, 0.0}, &seen);
+    };
+    for (int k = 0; k < 10; ++k) ASSERT_EQ(drive(0.4, 0.0, next++, true).kind, Action::Kind::kCreate);
+    for (const auto& [step, n] : {std::pair{0.4, 5}, std::pair{0.4, 10}, std::pair{0.34, 5}}) {
+      drive(0.0, kPi / 2, next++, true);
+      for (int i = 0; i < n; ++i) drive(step, 0.0, next++, true);
+    }
+    drive(0.0, kPi / 2, next++, true);  // at (0, 0.3) facing east
+    int recognised = 0;
+    for (uint32_t k = 0; k < 10; ++k) {
+      const Action a = drive(0.4, 0.0, k, false);
+      if (a.kind != Action::Kind::kLink && a.kind != Action::Kind::kSet) continue;
+      ++recognised;
+      EXPECT_EQ(a.experience_id, k);
+      EXPECT_NEAR(a.offset_x_m, 0.0, c.beside ? 0.03 : 1e-9) << k;
+      EXPECT_NEAR(a.offset_y_m, c.beside ? 0.3 : 0.0, c.beside ? 0.03 : 1e-9) << k;
+    }
+    EXPECT_GE(recognised, 8);
+  }
+}
+
 // After a restart the network adopts the experience map's experiences: those it made itself
 // (same id, template and cell) keep their boundaries and stay checked; the others are unchecked.
 TEST(PoseCellNetwork, AdoptedMapKeepsTheBoundariesOfTheNetworksOwnExperiences) {
@@ -496,6 +544,9 @@ TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
   PoseCellConfig cfg = SmallConfig();
   cfg.exp_view_offset = true;  // its odometry and recent views are state too
   cfg.exp_view_offset_frames = 8;
+  cfg.exp_submap_offset = true;  // and the recent boundaries
+  cfg.exp_submap_min_age_frames = 5;
+  cfg.exp_submap_frames = 10;
   PoseCellNetwork a(cfg);
   uint32_t next = 0;
   auto frame_input = [&](int i, uint32_t& tid, bool& is_new) {
@@ -511,8 +562,9 @@ TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
     uint32_t tid;
     bool is_new;
     frame_input(i, tid, is_new);
+    const FloorBoundary seen = CornerScan(0.1 * (i % 5));
     a.ProcessFrame(0.6 + 0.1 * std::sin(i), 0.2 * std::cos(0.3 * i), 0.1 * (1 + i % 3),
-                   {tid, is_new, 0.05 * (i % 4), 0.01 * (i % 5)});
+                   {tid, is_new, 0.05 * (i % 4), 0.01 * (i % 5)}, &seen);
   }
   PoseCellNetwork b(cfg);
   b.LoadState(a.SaveState());
@@ -523,8 +575,9 @@ TEST(PoseCellNetwork, SavedAndLoadedNetworkEmitsIdenticalActions) {
     bool is_new;
     frame_input(i, tid, is_new);
     const double v = 0.6 + 0.1 * std::sin(i), w = 0.2 * std::cos(0.3 * i), dt = 0.1 * (1 + i % 3);
-    const Action x = a.ProcessFrame(v, w, dt, {tid, is_new, 0.05 * (i % 4), 0.01 * (i % 5)});
-    const Action y = b.ProcessFrame(v, w, dt, {tid, is_new, 0.05 * (i % 4), 0.01 * (i % 5)});
+    const FloorBoundary seen = CornerScan(0.1 * (i % 5));
+    const Action x = a.ProcessFrame(v, w, dt, {tid, is_new, 0.05 * (i % 4), 0.01 * (i % 5)}, &seen);
+    const Action y = b.ProcessFrame(v, w, dt, {tid, is_new, 0.05 * (i % 4), 0.01 * (i % 5)}, &seen);
     ASSERT_EQ(x.kind, y.kind) << i;
     ASSERT_EQ(x.offset_x_m, y.offset_x_m) << i;
     ASSERT_EQ(x.offset_y_m, y.offset_y_m) << i;
@@ -571,7 +624,15 @@ TEST(PoseCellNetwork, LoadRefusesStateOfOtherDimensionsOrInconsistentIds) {
   lost.mutable_experiences(0)->mutable_odometry()->set_x(std::numeric_limits<double>::infinity());
   proto::State negative = a.SaveState();
   negative.add_recent_views()->set_difference(-1.0);
-  for (const proto::State& s : {bad, unknown_view, lost, negative}) {
+  proto::State odd = a.SaveState();
+  odd.add_recent_boundaries()->add_xy(1.0f);  // half a point
+  proto::State future = a.SaveState();
+  future.add_recent_boundaries()->set_frame(2);  // one frame processed
+  proto::State nan_point = a.SaveState();
+  auto* point = nan_point.add_recent_boundaries();
+  point->add_xy(1.0f);
+  point->add_xy(std::numeric_limits<float>::quiet_NaN());
+  for (const proto::State& s : {bad, unknown_view, lost, negative, odd, future, nan_point}) {
     PoseCellNetwork c(SmallConfig());
     EXPECT_THROW(c.LoadState(s), std::invalid_argument);
   }
