@@ -224,6 +224,70 @@ TEST_F(PoseCellsServiceTest, ViewOffsetRidesOnTheRecognitionsAsTheLibraryMeasure
   if (HasFailure()) ADD_FAILURE() << service->Output();
 }
 
+// exp_submap_offset alone: the service keeps the floor boundaries for it (the check and the
+// other offsets off) and its links and sets carry the offset the library registers from both
+// laps' walls. The laps run down a corridor ringing the square, the second 0.3 m north of the
+// first (the same odometry); once the last 30 frames lie on the second lap the walls say so,
+// along the south side and round its corner (further up the east side the shift runs along the
+// corridor, where the point-to-point registration slides: not driven here).
+TEST_F(PoseCellsServiceTest, SubmapOffsetRidesOnTheRecognitionsAsTheLibraryMeasuresIt) {
+  auto service = Start({"--set", "pose_cells.exp_submap_offset=true", "--set",
+                        "pose_cells.exp_submap_min_age_frames=50"});
+  // The walls either side of the path, pillars 0.4 m deep on the outer ones every 2 m.
+  std::vector<testing::Wall> ring = {{-1, -1, 11, -1}, {11, -1, 11, 11}, {11, 11, -1, 11}, {-1, 11, -1, -1},
+                                     {1, 1, 9, 1},     {9, 1, 9, 9},     {9, 9, 1, 9},     {1, 9, 1, 1}};
+  for (double a = 2.0; a < 9.0; a += 2.0) {
+    ring.push_back({a, -1, a, -0.6});  // south side
+    ring.push_back({a, -0.6, a + 0.4, -0.6});
+    ring.push_back({a + 0.4, -0.6, a + 0.4, -1});
+    ring.push_back({11, a, 10.6, a});  // east side
+    ring.push_back({10.6, a, 10.6, a + 0.4});
+    ring.push_back({10.6, a + 0.4, 11, a + 0.4});
+  }
+  const int frames = testing::kLapFrames + 37;
+  std::vector<ScriptedFrame> script = testing::ScriptedLoop(frames);
+  std::vector<double> heading(frames);  // the odometry's, after each frame
+  double x = 0.0, y = 0.0, th = 0.0;
+  for (int i = 0; i < frames; ++i) {
+    const msg::Velocity& v = script[i].velocity;
+    x += v.vtrans_mps * v.dt_s * std::cos(th);
+    y += v.vtrans_mps * v.dt_s * std::sin(th);
+    th += v.vrot_radps * v.dt_s;
+    heading[i] = th;
+    script[i].velocity.boundary_measured = true;
+    script[i].velocity.boundary = Message(testing::ScanOfWalls(ring, x, y + (i < testing::kLapFrames ? 0.0 : 0.3), th));
+  }
+  const auto actions = Drive(script);
+  ASSERT_EQ(actions.size(), static_cast<size_t>(frames)) << service->Output();
+  pose_cells::PoseCellConfig config;
+  config.exp_submap_offset = true;
+  config.exp_submap_min_age_frames = 50;
+  pose_cells::PoseCellNetwork reference(config);
+  std::vector<double> made_facing;  // per experience
+  int measured = 0;
+  for (int i = 0; i < frames; ++i) {
+    const ScriptedFrame& f = script[i];
+    pose_cells::FloorBoundary boundary;
+    for (const msg::FloorPoint& p : f.velocity.boundary) boundary.emplace_back(p.x_m, p.y_m);
+    const pose_cells::Action want = reference.ProcessFrame(f.velocity.vtrans_mps, f.velocity.vrot_radps,
+                                                           f.velocity.dt_s, MatchOf(f), &boundary);
+    ASSERT_EQ(actions[i].kind, KindOf(want.kind)) << "frame " << i;
+    EXPECT_EQ(actions[i].offset_x_m, want.offset_x_m) << "frame " << i;
+    EXPECT_EQ(actions[i].offset_y_m, want.offset_y_m) << "frame " << i;
+    if (want.kind == pose_cells::Action::Kind::kCreate) made_facing.push_back(heading[i]);
+    if (want.kind != pose_cells::Action::Kind::kLink && want.kind != pose_cells::Action::Kind::kSet) continue;
+    if (want.offset_x_m == 0.0 && want.offset_y_m == 0.0) continue;  // the walls did not register yet
+    ASSERT_LT(want.experience_id, made_facing.size());
+    // 0.3 m north, in the frame of the experience (made facing made_facing).
+    const double facing = made_facing[want.experience_id];
+    EXPECT_NEAR(want.offset_x_m, 0.3 * std::sin(facing), 0.03) << "frame " << i;
+    EXPECT_NEAR(want.offset_y_m, 0.3 * std::cos(facing), 0.03) << "frame " << i;
+    ++measured;
+  }
+  EXPECT_GE(measured, 8);
+  if (HasFailure()) ADD_FAILURE() << service->Output();
+}
+
 TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
   auto service = Start();
   std::vector<ScriptedFrame> script = testing::ScriptedLoop(12);
