@@ -57,10 +57,11 @@ struct PoseCellConfig {
   // as exp_boundary_check requires (boundary_match.h): the floor boundaries of the experiences
   // made within exp_submap_frames frames of the recognised one, and those of the last
   // exp_submap_frames frames, each set placed by the odometry of its own visit. One frame's
-  // boundary is a few metres of wall ahead, which slides along a corridor; the walls passed
-  // before and after pin the offset across it. Takes precedence over exp_view_offset, whose
-  // offset to an old place is mostly the robot on it (its best view is the frame that
-  // recognised it) however far beside it the robot drives this time.
+  // boundary is a few metres of wall ahead, which slides along a corridor; thirty frames take in
+  // the corners and openings that pin it (a corridor without any still lets it slide along).
+  // Takes precedence over exp_view_offset, whose offset to an old place often puts the robot on
+  // it (its best view is the frame that recognised it) however far beside it the robot drives
+  // this time.
   bool exp_submap_offset = false;
   int exp_submap_min_age_frames = 150;
   int exp_submap_frames = 30;
