@@ -1121,6 +1121,28 @@ int PoseCellNetwork::ActiveCellCount() const {
   return n;
 }
 
+namespace {
+
+// A floor boundary in the saved state: x0, y0, x1, y1, ... (experiences and recent boundaries).
+void SavePoints(const FloorBoundary& points, google::protobuf::RepeatedField<float>* xy) {
+  for (const Eigen::Vector2f& p : points) {
+    xy->Add(p.x());
+    xy->Add(p.y());
+  }
+}
+
+bool ArePoints(const google::protobuf::RepeatedField<float>& xy) {
+  return xy.size() % 2 == 0 && std::all_of(xy.begin(), xy.end(), [](float v) { return std::isfinite(v); });
+}
+
+FloorBoundary LoadPoints(const google::protobuf::RepeatedField<float>& xy) {
+  FloorBoundary points;
+  for (int i = 0; i + 1 < xy.size(); i += 2) points.emplace_back(xy[i], xy[i + 1]);
+  return points;
+}
+
+}  // namespace
+
 proto::State PoseCellNetwork::SaveState() const {
   proto::State s;
   s.set_dim_xy(dim_xy_);
@@ -1157,12 +1179,7 @@ proto::State PoseCellNetwork::SaveState() const {
     pe->set_template_id(e.template_id);
     pe->set_created_frame(e.created_frame);
     pe->set_boundary_known(e.boundary.has_value());
-    if (e.boundary) {
-      for (const Eigen::Vector2f& p : *e.boundary) {
-        pe->add_boundary_xy(p.x());
-        pe->add_boundary_xy(p.y());
-      }
-    }
+    if (e.boundary) SavePoints(*e.boundary, pe->mutable_boundary_xy());
     if (e.odometry) SavePose(*e.odometry, pe->mutable_odometry());
   }
   for (const RecentView& v : recent_views_) {
@@ -1175,10 +1192,7 @@ proto::State PoseCellNetwork::SaveState() const {
     auto* pb = s.add_recent_boundaries();
     pb->set_frame(b.frame);
     SavePose(b.odometry, pb->mutable_odometry());
-    for (const Eigen::Vector2f& p : b.points) {
-      pb->add_xy(p.x());
-      pb->add_xy(p.y());
-    }
+    SavePoints(b.points, pb->mutable_xy());
   }
   SavePose(odometry_, s.mutable_odometry());
   for (uint32_t a = 0; a < links_of_.size(); ++a) {
@@ -1243,10 +1257,8 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
     if (e.template_id() >= n_views) fail("experience refers to unknown template");
     if (seen_exp[i] != 1) fail("experience not listed exactly once under its template");
     if (e.created_frame() > s.frames_processed()) fail("experience made after the last frame");
-    if (e.boundary_xy_size() % 2 != 0 || (!e.boundary_known() && e.boundary_xy_size() > 0))
-      fail("experience boundary is not a list of points");
-    for (float v : e.boundary_xy())
-      if (!std::isfinite(v)) fail("experience boundary point not finite");
+    if (!ArePoints(e.boundary_xy()) || (!e.boundary_known() && e.boundary_xy_size() > 0))
+      fail("experience boundary is not a list of finite points");
     if (!IsFinite(LoadPose(e.odometry()))) fail("experience odometry pose not finite");
   }
   for (const auto& v : s.recent_views()) {
@@ -1256,9 +1268,7 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   }
   for (const auto& b : s.recent_boundaries()) {
     if (b.frame() > s.frames_processed()) fail("recent boundary seen after the last frame");
-    if (b.xy_size() % 2 != 0) fail("recent boundary is not a list of points");
-    for (float v : b.xy())
-      if (!std::isfinite(v)) fail("recent boundary point not finite");
+    if (!ArePoints(b.xy())) fail("recent boundary is not a list of finite points");
     if (!IsFinite(LoadPose(b.odometry()))) fail("recent boundary odometry pose not finite");
   }
   if (!IsFinite(LoadPose(s.odometry()))) fail("odometry pose not finite");
@@ -1292,10 +1302,7 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   experiences_.clear();
   for (const auto& e : s.experiences()) {
     std::optional<FloorBoundary> boundary;
-    if (e.boundary_known()) {
-      boundary.emplace();
-      for (int i = 0; i + 1 < e.boundary_xy_size(); i += 2) boundary->emplace_back(e.boundary_xy(i), e.boundary_xy(i + 1));
-    }
+    if (e.boundary_known()) boundary = LoadPoints(e.boundary_xy());
     experiences_.push_back({e.pc_x(), e.pc_y(), e.pc_th(), e.template_id(), e.created_frame(), std::move(boundary),
                             e.has_odometry() ? std::optional(LoadPose(e.odometry())) : std::nullopt});
   }
@@ -1303,11 +1310,8 @@ void PoseCellNetwork::LoadState(const proto::State& s) {
   for (const auto& v : s.recent_views()) recent_views_.push_back({v.template_id(), v.difference(), LoadPose(v.odometry())});
   while (recent_views_.size() > static_cast<size_t>(config_.exp_view_offset_frames)) recent_views_.pop_front();
   recent_boundaries_.clear();
-  for (const auto& b : s.recent_boundaries()) {
-    FloorBoundary points;
-    for (int i = 0; i + 1 < b.xy_size(); i += 2) points.emplace_back(b.xy(i), b.xy(i + 1));
-    recent_boundaries_.push_back({b.frame(), LoadPose(b.odometry()), std::move(points)});
-  }
+  for (const auto& b : s.recent_boundaries())
+    recent_boundaries_.push_back({b.frame(), LoadPose(b.odometry()), LoadPoints(b.xy())});
   odometry_ = LoadPose(s.odometry());
   links_of_.assign(n_exps, {});
   for (const auto& l : s.links()) {

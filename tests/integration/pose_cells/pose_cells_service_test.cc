@@ -247,15 +247,14 @@ TEST_F(PoseCellsServiceTest, SubmapOffsetRidesOnTheRecognitionsAsTheLibraryMeasu
   const int frames = testing::kLapFrames + 37;
   std::vector<ScriptedFrame> script = testing::ScriptedLoop(frames);
   std::vector<double> heading(frames);  // the odometry's, after each frame
-  double x = 0.0, y = 0.0, th = 0.0;
+  Pose2D odometry;                      // as the network dead-reckons it
   for (int i = 0; i < frames; ++i) {
     const msg::Velocity& v = script[i].velocity;
-    x += v.vtrans_mps * v.dt_s * std::cos(th);
-    y += v.vtrans_mps * v.dt_s * std::sin(th);
-    th += v.vrot_radps * v.dt_s;
-    heading[i] = th;
+    odometry = Compose(odometry, {v.vtrans_mps * v.dt_s, 0.0, v.vrot_radps * v.dt_s});
+    heading[i] = odometry.theta;
     script[i].velocity.boundary_measured = true;
-    script[i].velocity.boundary = Message(testing::ScanOfWalls(ring, x, y + (i < testing::kLapFrames ? 0.0 : 0.3), th));
+    script[i].velocity.boundary = Message(testing::ScanOfWalls(
+        ring, odometry.x, odometry.y + (i < testing::kLapFrames ? 0.0 : 0.3), odometry.theta));
   }
   const auto actions = Drive(script);
   ASSERT_EQ(actions.size(), static_cast<size_t>(frames)) << service->Output();
