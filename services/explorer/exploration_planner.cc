@@ -312,51 +312,6 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   const bool centre_step = off_centre > 0.25 * cs.cell_size_m;
   const bool centre_step_clear = !centre_step || (IsPathClear(occupancy, to_centre, off_centre) &&
                                                   !PassesBlockingObstacle(to_centre, off_centre));
-  // Squeezable: a cell of the margin that holds no obstacle and nothing unseen itself.
-  const auto squeezable = [&](size_t i) {
-    return cs.cells[i] == CellClass::kOccupied && !cs.obstacle[i] && !cs.unseen[i];
-  };
-  const auto squeeze = [&] {
-    squeezing = true;
-    for (size_t i = 0; i < n; ++i) {
-      if (!squeezable(i)) continue;
-      traversable_without_keep_off[i] = 1;
-      if (!near_blocking[i]) traversable[i] = 1;
-    }
-  };
-  // squeeze_when_nearer: unknown space that only a squeeze reaches (past a gap narrower than the
-  // robot plus both margins) is headed for while it is nearer than any the free cells reach, not
-  // only once those are all seen. before_gap keeps the free cells (without what is kept off) and
-  // the goals: if the way past the gap is refused, the plans go on as if it had not been tried.
-  std::optional<std::pair<std::vector<uint8_t>, std::vector<uint8_t>>> before_gap;
-  if (config_.squeeze_when_nearer) {
-    const std::vector<int32_t> cost = ComputeExplorationTransform(cs.width, cs.height, traversable, goal);
-    if (cost[robot_index] != kUnreachable) {
-      // The goals the free cells reach: next to a cell reachable from the robot.
-      std::vector<uint8_t> robot_cell(n, 0);
-      robot_cell[robot_index] = 1;
-      const std::vector<int32_t> from_robot = ComputeExplorationTransform(cs.width, cs.height, traversable, robot_cell);
-      std::vector<uint8_t> past_gap(n, 0);
-      for (size_t i = 0; i < n; ++i) {
-        if (!goal[i]) continue;
-        const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
-        bool reached = false;
-        for (int k = 0; k < 8 && !reached; ++k) {
-          const int nx = x + kNeighbourDx[k], ny = y + kNeighbourDy[k];
-          reached = cs.Contains(nx, ny) && from_robot[static_cast<size_t>(ny) * w + nx] != kUnreachable;
-        }
-        past_gap[i] = !reached;
-      }
-      std::vector<uint8_t> through = traversable;
-      for (size_t i = 0; i < n; ++i)
-        if (squeezable(i) && !near_blocking[i]) through[i] = 1;
-      if (ComputeExplorationTransform(cs.width, cs.height, through, past_gap)[robot_index] < cost[robot_index]) {
-        before_gap.emplace(traversable_without_keep_off, goal);
-        squeeze();
-        goal = std::move(past_gap);
-      }
-    }
-  }
   while (true) {
     const std::vector<int32_t> cost = ComputeExplorationTransform(cs.width, cs.height, traversable, goal);
     Plan plan;
@@ -372,15 +327,6 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       else if (cost[robot_index] == kUnreachable) escape = EscapePath(cs, cost, near_blocking, rx, ry);
     }
     if (cost[robot_index] == kUnreachable && escape.empty()) {
-      if (before_gap) {  // the way to the gap's far side was refused: plan as without the key
-        traversable_without_keep_off = std::move(before_gap->first);
-        goal = std::move(before_gap->second);
-        before_gap.reset();
-        for (size_t i = 0; i < n; ++i) traversable[i] = traversable_without_keep_off[i] && !near_blocking[i];
-        squeezing = false;
-        first_blocked.reset();
-        continue;
-      }
       if (first_blocked) return *first_blocked;
       // What the planner keeps from refused moves may be all that leaves no unknown space
       // reachable: the obstacles kept off since the last look (they pile up between pirouettes,
@@ -428,7 +374,12 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       // Seven of twelve demo runs ended right after a refusal on such a plan, one with 4.5% of
       // the floor unseen past a narrow passage, before the look above also counted the margin.
       if (config_.squeeze_through_margin && !squeezing) {
-        squeeze();
+        squeezing = true;
+        for (size_t i = 0; i < n; ++i) {
+          if (cs.cells[i] != CellClass::kOccupied || cs.obstacle[i] || cs.unseen[i]) continue;
+          traversable_without_keep_off[i] = 1;
+          if (!near_blocking[i]) traversable[i] = 1;
+        }
         continue;
       }
       // Still nothing: the unknown space may lie in the margin itself (margin_goals).

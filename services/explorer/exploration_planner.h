@@ -8,8 +8,7 @@
 //     moves (their obstacles, the goals set aside after them) is all that stands in the way: then
 //     it looks all round and tries those goals again (blocked_goal_retries); or unless a way
 //     through the margin itself leads to unknown space (squeeze_through_margin: doors narrower
-//     than the robot plus both margins; with squeeze_when_nearer also while such space is nearer
-//     than any other), or to unknown space inside the margin (margin_goals: a
+//     than the robot plus both margins), or to unknown space inside the margin (margin_goals: a
 //     door's far side); or unless the finer grid of finishing_cell_factor, on
 //     which the planner then goes on to the end, still reaches unknown space;
 //  3. descends the transform from the robot's cell to the last free cell before the nearest

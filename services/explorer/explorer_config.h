@@ -21,11 +21,6 @@ struct ExplorerConfig {
   int max_blocked_attempts = 3;       // look-before-you-move failures before a goal is set aside
   int blocked_goal_retries = 1;       // times such a goal is tried again before exploration ends
   bool squeeze_through_margin = true; // before calling exploration complete, plan through the margin
-  // ... and, before that, whenever unknown space only such a squeeze reaches is nearer than any the
-  // free cells reach: a doorway is looked through while the robot passes it. Left to the end, the
-  // map's corrections had often narrowed it by then (a demo run's 0.76 m door drawn 0.5 m wide
-  // after 100 s), and 4% of the floor behind it stayed unseen.
-  bool squeeze_when_nearer = false;
   // ... and if even that reaches no unknown space, take for goals the margin's cells that hold
   // unknown space but no obstacle of their own: the unknown past a gap narrower than the robot
   // plus both margins lies in the margin itself, so no goal was left past it (a demo run ended
@@ -60,8 +55,6 @@ struct ExplorerConfig {
       "times goals set aside after blocked moves are tried again (after a look all round) before exploration ends");
     v("squeeze_through_margin", squeeze_through_margin,
       "when no unknown space is reachable over free cells, plan through the dilation margin (moves still keep the radius)");
-    v("squeeze_when_nearer", squeeze_when_nearer,
-      "plan through the margin to unknown space only that reaches whenever it is nearer than any the free cells reach");
     v("margin_goals", margin_goals,
       "when even squeezing through the margin reaches no unknown space, its cells that hold some (and no obstacle) are goals");
     v("straighten_paths", straighten_paths,

@@ -605,37 +605,6 @@ TEST(ExplorationPlannerTest, SqueezesThroughADoorNarrowerThanTheMarginsBeforeCal
   EXPECT_TRUE(planner.PlanFrom(grid.View(), robot).complete);
 }
 
-TEST(ExplorationPlannerTest, SqueezesThroughADoorItPassesWhenThatIsNearerThanAnyOtherUnknownSpace) {
-  // The narrow door's room with unknown space also at its far end (x < 0.5 m), which the free
-  // cells reach. A robot 0.7 m from the door, 6 m from that end: without squeeze_when_nearer the
-  // door waits until the end has been seen; with it the robot goes through the door now.
-  TestGrid grid = RoomWithANarrowDoor();
-  for (int y = 1; y < 59; ++y)
-    for (int x = 1; x < 10; ++x) grid.Set(x, y, -1);
-  ExplorerConfig config = Config();
-  config.robot_radius_m = 0.1;
-  const Pose2D robot{6.8, 1.0, M_PI};
-  const Plan later = ExplorationPlanner(config).PlanFrom(grid.View(), robot);
-  ASSERT_FALSE(later.complete) << later.reason;
-  EXPECT_LT(later.target.x, 1.0) << later.reason;
-  EXPECT_EQ(later.reason.find("through the margin"), std::string::npos) << later.reason;
-  config.squeeze_when_nearer = true;
-  ExplorationPlanner planner(config);
-  const Plan now = planner.PlanFrom(grid.View(), robot);
-  ASSERT_FALSE(now.complete) << now.reason;
-  EXPECT_NE(now.reason.find("through the margin"), std::string::npos) << now.reason;
-  EXPECT_GT(now.target.x, 7.0) << now.reason;
-  EXPECT_NEAR(now.target.y, 1.5, 0.2);
-  ExpectMovesClear(planner, grid.View(), now, robot);
-  // Nearer to the far end than to the door: the far end first.
-  EXPECT_LT(planner.PlanFrom(grid.View(), {2.0, 1.0, 0.0}).target.x, 1.0);
-  // The way through refused (kept off until the next look): the far end, not complete.
-  planner.ReportBlocked(now, std::pair{7.5, 1.5});
-  const Plan refused = planner.PlanFrom(grid.View(), robot);
-  ASSERT_FALSE(refused.complete) << refused.reason;
-  EXPECT_LT(refused.target.x, 1.0) << refused.reason;
-}
-
 TEST(ExplorationPlannerTest, ARefusalOnTheWayThroughTheMarginIsLookedAtBeforeCallingItComplete) {
   // The squeeze above, refused in the door (a bump or look before you move): kept off, that
   // obstacle closes the only way. Seen at the end of seven of twelve demo runs: the last plan
