@@ -68,9 +68,41 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
   const double gate = std::min(config_.exp_manhattan_max_offset_rad,
                                config_.exp_manhattan_min_offset_rad +
                                    config_.exp_manhattan_offset_per_rad_turned * turned_since_hold_rad_);
-  if (std::abs(offset) > gate) return;
-  accum_facing_ = WrapAngle(accum_facing_ - config_.exp_manhattan_gain * offset);
+  if (std::abs(offset) > gate) {
+    // A heading that drifted past the widest gate is never pulled back by walls on the axes: they
+    // all come the same offset off. Walls off the axes (a funnel's, a round table's chords) come
+    // at offsets that differ as the robot turns. So exp_manhattan_recapture_frames offsets in a
+    // row past the widest gate, if they agree within exp_manhattan_recapture_spread_rad over
+    // exp_manhattan_recapture_turn_rad of turning, are the heading's drift: taken out at once.
+    // Not past exp_manhattan_recapture_max_rad: walls at 45 degrees to the axes are as far from
+    // one axis as from the other.
+    const int frames = config_.exp_manhattan_recapture_frames;
+    if (frames <= 0) return;
+    if (std::abs(offset) <= config_.exp_manhattan_max_offset_rad) {  // the widest gate would hold it
+      offsets_outside_gate_.clear();
+      return;
+    }
+    offsets_outside_gate_.emplace_back(offset, turned_since_hold_rad_);
+    if (offsets_outside_gate_.size() > static_cast<size_t>(frames)) offsets_outside_gate_.pop_front();
+    if (offsets_outside_gate_.size() < static_cast<size_t>(frames) ||
+        turned_since_hold_rad_ - offsets_outside_gate_.front().second < config_.exp_manhattan_recapture_turn_rad)
+      return;
+    double sum_cos = 0.0, sum_sin = 0.0;
+    for (const auto& [o, turned] : offsets_outside_gate_) {
+      sum_cos += std::cos(4.0 * o);
+      sum_sin += std::sin(4.0 * o);
+    }
+    const double mean = std::atan2(sum_sin, sum_cos) / 4.0;
+    if (std::abs(mean) > config_.exp_manhattan_recapture_max_rad) return;
+    for (const auto& [o, turned] : offsets_outside_gate_)
+      if (std::abs(std::remainder(o - mean, kPi / 2.0)) > config_.exp_manhattan_recapture_spread_rad) return;
+    accum_facing_ = WrapAngle(accum_facing_ - mean);
+    ++heading_recaptures_;
+  } else {
+    accum_facing_ = WrapAngle(accum_facing_ - config_.exp_manhattan_gain * offset);
+  }
   turned_since_hold_rad_ = 0.0;
+  offsets_outside_gate_.clear();
 }
 
 ExperienceMap::Observation ExperienceMap::ObservedFromCurrent(const ExperienceAction& a) const {

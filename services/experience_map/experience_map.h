@@ -29,6 +29,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <deque>
 #include <limits>
 #include <numbers>
 #include <optional>
@@ -114,6 +115,8 @@ class ExperienceMap {
 
   // Recognitions refused by exp_recognition_max_jump_m so far (not saved).
   uint64_t refused_recognitions() const { return refused_recognitions_; }
+  // Headings taken back from past the heading hold's gate (exp_manhattan_recapture_frames).
+  uint64_t heading_recaptures() const { return heading_recaptures_; }
   // After a refused recognition, the experience the pose cells take for current (the map keeps
   // its own, current_id()); actions from either are accepted until the next create or
   // recognition taken.
@@ -212,10 +215,15 @@ class ExperienceMap {
   // Turned (rad, summed absolute) since a wall direction last held the heading: widens the gate.
   // A loaded map starts with the gate wide open (its heading's history is not saved).
   double turned_since_hold_rad_ = 0.0;
+  // exp_manhattan_recapture_frames: the wall directions' offsets from the axes since the last hold
+  // (at most that many, the latest), each with turned_since_hold_rad_ when it came. Not saved: a
+  // loaded map gathers them afresh.
+  std::deque<std::pair<double, double>> offsets_outside_gate_;
   // exp_recognition_max_jump_m: metres driven since the last recognition taken (or the start).
   double driven_since_recognition_m_ = 0.0;
   std::optional<uint32_t> pose_cells_current_;
   uint64_t refused_recognitions_ = 0;
+  uint64_t heading_recaptures_ = 0;
   bool graph_pending_ = false;    // links changed since the last least-squares correction
   int frames_since_graph_ = 0;
 };

@@ -83,6 +83,12 @@ struct ExperienceMapConfig {
   double exp_manhattan_offset_per_rad_turned = 0.0;
   double exp_manhattan_max_offset_rad = 0.25;
   double exp_manhattan_gain = 0.2;
+  // The gate's blind spot: a heading that drifted past exp_manhattan_max_offset_rad (ExperienceMap::
+  // HoldHeading). 0 = off.
+  int exp_manhattan_recapture_frames = 0;
+  double exp_manhattan_recapture_spread_rad = 0.05;
+  double exp_manhattan_recapture_turn_rad = 1.0;
+  double exp_manhattan_recapture_max_rad = 0.5;
   // With exp_graph_optimisation: each experience's first wall direction holds its facing to the
   // axes in the least-squares correction with this uncertainty (0: only the robot is held). An
   // experience given its wall direction calls for a correction, as a closure does (at most one
@@ -130,6 +136,14 @@ struct ExperienceMapConfig {
     v("exp_manhattan_max_offset_rad", exp_manhattan_max_offset_rad,
       "... up to this; the least-squares correction's gate for the experiences' walls (rad)");
     v("exp_manhattan_gain", exp_manhattan_gain, "share of a wall direction's offset from its axis taken out per frame");
+    v("exp_manhattan_recapture_frames", exp_manhattan_recapture_frames,
+      "wall directions past the gate that, agreeing, are taken for the heading's drift and taken out at once (0 = off)");
+    v("exp_manhattan_recapture_spread_rad", exp_manhattan_recapture_spread_rad,
+      "how far those may lie from their mean (rad)");
+    v("exp_manhattan_recapture_turn_rad", exp_manhattan_recapture_turn_rad,
+      "how far the robot must have turned while they came (rad)");
+    v("exp_manhattan_recapture_max_rad", exp_manhattan_recapture_max_rad,
+      "the largest drift taken out so (rad)");
     v("exp_manhattan_sigma_rad", exp_manhattan_sigma_rad,
       "> 0, with exp_graph_optimisation: uncertainty of the experiences' wall directions in the least-squares correction (rad)");
   }
@@ -164,6 +178,16 @@ struct ExperienceMapConfig {
             "exp_manhattan_min_offset_rad", "must be positive");
     Require(std::isfinite(exp_manhattan_offset_per_rad_turned) && exp_manhattan_offset_per_rad_turned >= 0,
             "exp_manhattan_offset_per_rad_turned", "must be >= 0");
+    Require(exp_manhattan_recapture_frames >= 0 && exp_manhattan_recapture_frames <= 100000,
+            "exp_manhattan_recapture_frames", "must be 0..100000");
+    Require(std::isfinite(exp_manhattan_recapture_spread_rad) && exp_manhattan_recapture_spread_rad > 0 &&
+                exp_manhattan_recapture_spread_rad < M_PI / 4,
+            "exp_manhattan_recapture_spread_rad", "must be in (0, pi/4)");
+    Require(std::isfinite(exp_manhattan_recapture_turn_rad) && exp_manhattan_recapture_turn_rad >= 0,
+            "exp_manhattan_recapture_turn_rad", "must be >= 0");
+    Require(std::isfinite(exp_manhattan_recapture_max_rad) && exp_manhattan_recapture_max_rad > 0 &&
+                exp_manhattan_recapture_max_rad < M_PI / 4,
+            "exp_manhattan_recapture_max_rad", "must be in (0, pi/4)");
     Require(std::isfinite(exp_manhattan_gain) && exp_manhattan_gain > 0 && exp_manhattan_gain <= 1,
             "exp_manhattan_gain", "must be in (0, 1]");
     Require(std::isfinite(exp_manhattan_sigma_rad) && exp_manhattan_sigma_rad >= 0, "exp_manhattan_sigma_rad",

@@ -16,6 +16,7 @@
 #include <thread>
 #include <utility>
 
+#include "common/math/angle.h"
 #include "common/persistence/state_file.h"
 #include "services/experience_map/experience_map.h"
 #include "services/experience_map/proto/experience_map_node_state.pb.h"
@@ -144,10 +145,15 @@ class ExperienceMapNode::Mapper {
     map_.Integrate(m.vtrans_mps, m.vrot_radps, m.dt_s);  // validated on arrival
     if (m.wall_seen) {
       const bool had_axes = map_.manhattan_axes().has_value();
+      const uint64_t recaptures_before = map_.heading_recaptures();
+      const double heading_before = map_.RobotPose().theta;
       map_.HoldHeading(m.wall_direction_rad);
       if (!had_axes && map_.manhattan_axes())
         spdlog::info("frame {}: the walls' axes are at {:.3f} rad (mod pi/2) in the map frame; holding the heading to them",
                      m.header.frame_seq, *map_.manhattan_axes());
+      if (map_.heading_recaptures() != recaptures_before)
+        spdlog::info("frame {}: the walls agree the heading drifted {:.3f} rad past the hold's gate: taken out",
+                     m.header.frame_seq, WrapAngle(heading_before - map_.RobotPose().theta));
     }
     const uint64_t refused_before = map_.refused_recognitions();
     try {

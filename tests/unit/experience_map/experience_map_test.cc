@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <memory>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -13,6 +12,7 @@
 #include <string>
 #include <utility>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <vector>
@@ -745,6 +745,75 @@ TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
   ExpectKeysRefused(config,
                     {{"exp_recognition_max_jump_m", [](ExperienceMapConfig& c) { c.exp_recognition_max_jump_m = -1; }},
                      {"exp_recognition_jump_per_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_per_m = NAN; }}});
+}
+
+TEST(ExperienceMap, HeadingThatDriftedPastTheGateIsTakenBackWhenTheWallsAgreeOnIt) {
+  // Heading 0.4 rad off the axes, past the gate's 0.3: walls on the axes all come 0.4 off.
+  ExperienceMapConfig config = HeldToWalls();
+  config.exp_manhattan_min_offset_rad = 0.1;
+  config.exp_manhattan_offset_per_rad_turned = 0.1;
+  config.exp_manhattan_max_offset_rad = 0.3;
+  const auto drifted = [&](int recapture_frames) {
+    ExperienceMapConfig c = config;
+    c.exp_manhattan_recapture_frames = recapture_frames;
+    auto map = std::make_unique<ExperienceMap>(c);
+    for (int i = 0; i < 5; ++i) map->HoldHeading(0.0);  // fixes the axes at 0
+    map->Integrate(0.0, 0.4, 1.0);  // a turn the robot did not make
+    return map;
+  };
+  // The robot turns 0.12 rad a frame and sees a wall on an axis each time: the wall direction
+  // (robot frame) that puts it `offset` off the axes.
+  const auto turn_and_see = [](ExperienceMap& map, double offset) {
+    map.Integrate(0.0, 0.12, 1.0);
+    map.HoldHeading(offset - map.RobotPose().theta);
+  };
+  const double noise[] = {0.02, -0.01, 0.0, 0.015, -0.02, 0.01, -0.015, 0.005, 0.0, -0.005};
+  // Off: never pulled back.
+  auto off = drifted(0);
+  for (double n : noise) turn_and_see(*off, 0.4 + n);
+  EXPECT_NEAR(off->RobotPose().theta, 1.6, 1e-9);
+  EXPECT_EQ(off->heading_recaptures(), 0u);
+  // Ten agreeing offsets over more than a radian of turning: the drift (their mean, 0.4) taken
+  // out at once.
+  auto on = drifted(10);
+  for (double n : noise) turn_and_see(*on, 0.4 + n);
+  EXPECT_NEAR(on->RobotPose().theta, 1.6 - 0.4, 1e-4);
+  EXPECT_EQ(on->heading_recaptures(), 1u);
+  const double recaptured = on->RobotPose().theta;
+  turn_and_see(*on, 0.05);  // within the gate again: held as before
+  EXPECT_NEAR(on->RobotPose().theta, recaptured + 0.12 - 0.01, 1e-9);
+  // A wall the widest gate would hold (0.29 rad off: a funnel's side seen while the gate is
+  // narrow) breaks the row: ten more are needed after it.
+  auto broken = drifted(10);
+  for (int i = 0; i < 10; ++i) turn_and_see(*broken, i == 5 ? 0.29 : 0.4);
+  EXPECT_EQ(broken->heading_recaptures(), 0u);
+  for (int i = 0; i < 6; ++i) turn_and_see(*broken, 0.4);
+  EXPECT_EQ(broken->heading_recaptures(), 1u);
+  // Walls off the axes (a funnel's two sides, 0.35 rad either way) disagree: nothing taken.
+  auto funnel = drifted(10);
+  for (int i = 0; i < 30; ++i) turn_and_see(*funnel, i % 2 ? 0.35 : -0.35);
+  EXPECT_EQ(funnel->heading_recaptures(), 0u);
+  EXPECT_NEAR(funnel->RobotPose().theta, WrapAngle(0.4 + 3.6), 1e-9);
+  // Walls 0.6 rad off, past exp_manhattan_recapture_max_rad (0.5): as near 45 degrees to the
+  // axes as to them, nothing taken.
+  auto diagonal = drifted(10);
+  for (double n : noise) turn_and_see(*diagonal, 0.6 + n);
+  EXPECT_EQ(diagonal->heading_recaptures(), 0u);
+  // The walls seen while the robot hardly turns (one wall, maybe off the axes): nothing taken.
+  auto still = drifted(10);
+  for (double n : noise) {
+    still->Integrate(0.0, 0.01, 1.0);
+    still->HoldHeading(0.4 + n - still->RobotPose().theta);
+  }
+  EXPECT_EQ(still->heading_recaptures(), 0u);
+
+  ExpectKeysRefused(config, {{"exp_manhattan_recapture_frames", [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_frames = -1; }},
+                             {"exp_manhattan_recapture_spread_rad",
+                              [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_spread_rad = 0; }},
+                             {"exp_manhattan_recapture_turn_rad",
+                              [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_turn_rad = NAN; }},
+                             {"exp_manhattan_recapture_max_rad",
+                              [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_max_rad = 0.8; }}});
 }
 
 TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurns) {
