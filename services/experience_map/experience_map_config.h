@@ -83,8 +83,8 @@ struct ExperienceMapConfig {
   double exp_manhattan_offset_per_rad_turned = 0.0;
   double exp_manhattan_max_offset_rad = 0.25;
   double exp_manhattan_gain = 0.2;
-  // The gate's blind spot: a heading that drifted past exp_manhattan_max_offset_rad (ExperienceMap::
-  // HoldHeading). 0 = off.
+  // A heading that drifted past exp_manhattan_max_offset_rad, taken back when this many wall
+  // directions in a row agree on the drift (ExperienceMap::HoldHeading has the rule). 0 = off.
   int exp_manhattan_recapture_frames = 0;
   double exp_manhattan_recapture_spread_rad = 0.05;
   double exp_manhattan_recapture_turn_rad = 1.0;

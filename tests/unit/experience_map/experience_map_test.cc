@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -12,7 +13,6 @@
 #include <string>
 #include <utility>
 #include <limits>
-#include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <vector>
