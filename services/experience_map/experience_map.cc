@@ -55,12 +55,10 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     if (manhattan_axes_ && config_.exp_manhattan_sigma_rad > 0) graph_pending_ = true;
   }
   if (!manhattan_axes_) {
-    manhattan_sum_cos_ += std::cos(4.0 * direction);
-    manhattan_sum_sin_ += std::sin(4.0 * direction);
+    manhattan_reference_.Add(direction);
     if (++manhattan_count_ < config_.exp_manhattan_reference_frames) return;
-    if (std::hypot(manhattan_sum_cos_, manhattan_sum_sin_) >= kMinAgreement * manhattan_count_)
-      manhattan_axes_ = std::atan2(manhattan_sum_sin_, manhattan_sum_cos_) / 4.0;
-    manhattan_sum_cos_ = manhattan_sum_sin_ = 0.0;
+    if (manhattan_reference_.Agreement() >= kMinAgreement * manhattan_count_) manhattan_axes_ = manhattan_reference_.Mean();
+    manhattan_reference_ = {};
     manhattan_count_ = 0;
     return;
   }
@@ -87,12 +85,9 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     if (offsets_outside_gate_.size() < static_cast<size_t>(frames) ||
         turned_since_hold_rad_ - offsets_outside_gate_.front().second < config_.exp_manhattan_recapture_turn_rad)
       return;
-    double sum_cos = 0.0, sum_sin = 0.0;
-    for (const auto& [o, turned] : offsets_outside_gate_) {
-      sum_cos += std::cos(4.0 * o);
-      sum_sin += std::sin(4.0 * o);
-    }
-    const double mean = std::atan2(sum_sin, sum_cos) / 4.0;
+    QuarterTurnMean offsets;
+    for (const auto& [o, turned] : offsets_outside_gate_) offsets.Add(o);
+    const double mean = offsets.Mean();
     if (std::abs(mean) > config_.exp_manhattan_recapture_max_rad) return;
     for (const auto& [o, turned] : offsets_outside_gate_)
       if (std::abs(std::remainder(o - mean, kPi / 2.0)) > config_.exp_manhattan_recapture_spread_rad) return;
@@ -584,8 +579,8 @@ proto::ExperienceMap ExperienceMap::Save() const {
   m.set_next_sequence(next_sequence_);
   m.set_has_manhattan_axes(manhattan_axes_.has_value());
   m.set_manhattan_axes_rad(manhattan_axes_.value_or(0.0));
-  m.set_manhattan_sum_cos(manhattan_sum_cos_);
-  m.set_manhattan_sum_sin(manhattan_sum_sin_);
+  m.set_manhattan_sum_cos(manhattan_reference_.sum_cos);
+  m.set_manhattan_sum_sin(manhattan_reference_.sum_sin);
   m.set_manhattan_count(static_cast<uint32_t>(manhattan_count_));
   m.set_has_pose_cells_current(pose_cells_current_.has_value());
   m.set_pose_cells_current_id(pose_cells_current_.value_or(0));
@@ -658,8 +653,7 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   local_region_.assign(m.local_region_links().begin(), m.local_region_links().end());
   next_sequence_ = m.next_sequence();
   manhattan_axes_ = m.has_manhattan_axes() ? std::optional(m.manhattan_axes_rad()) : std::nullopt;
-  manhattan_sum_cos_ = m.manhattan_sum_cos();
-  manhattan_sum_sin_ = m.manhattan_sum_sin();
+  manhattan_reference_ = {m.manhattan_sum_cos(), m.manhattan_sum_sin()};
   manhattan_count_ = static_cast<int>(m.manhattan_count());
   turned_since_hold_rad_ = std::numeric_limits<double>::max();  // the gate wide open
   pose_cells_current_ = m.has_pose_cells_current() ? std::optional(m.pose_cells_current_id()) : std::nullopt;

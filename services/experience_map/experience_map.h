@@ -207,10 +207,9 @@ class ExperienceMap {
   std::vector<LinkTrig> link_trig_;
   uint64_t next_sequence_ = 0;
   double last_correction_ = 0.0;
-  // HoldHeading: the axes once fixed, and while fixing them the sums of cos and sin of 4 x the
-  // wall directions so far.
+  // HoldHeading: the axes once fixed, and while fixing them the mean of the wall directions so far.
   std::optional<double> manhattan_axes_;
-  double manhattan_sum_cos_ = 0.0, manhattan_sum_sin_ = 0.0;
+  QuarterTurnMean manhattan_reference_;
   int manhattan_count_ = 0;
   // Turned (rad, summed absolute) since a wall direction last held the heading: widens the gate.
   // A loaded map starts with the gate wide open (its heading's history is not saved).

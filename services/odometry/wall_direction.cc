@@ -2,13 +2,15 @@
 
 #include <cmath>
 
+#include "common/math/angle.h"
 #include "services/odometry/boundary_scan.h"
 
 namespace rslam::odometry {
 
 std::optional<double> WallDirection(std::span<const Eigen::Vector2d> boundary, const WallDirectionConfig& config) {
   const size_t k = static_cast<size_t>(config.baseline_points);
-  double sum_cos = 0.0, sum_sin = 0.0, length = 0.0;
+  QuarterTurnMean mean;
+  double length = 0.0;
   for (size_t i = 0; i + k < boundary.size(); ++i) {
     if (boundary[i].norm() > config.max_range_m || boundary[i + k].norm() > config.max_range_m) continue;
     bool one_line = true;
@@ -18,15 +20,13 @@ std::optional<double> WallDirection(std::span<const Eigen::Vector2d> boundary, c
     const Eigen::Vector2d d = boundary[i + k] - boundary[i];
     const double l = d.norm();
     if (l <= 0.0) continue;
-    const double a = 4.0 * std::atan2(d.y(), d.x());
-    sum_cos += l * std::cos(a);
-    sum_sin += l * std::sin(a);
+    mean.Add(std::atan2(d.y(), d.x()), l);
     length += l;
   }
   // Overlapping pairs k bins apart count each stretch of wall k times.
-  if (length / static_cast<double>(k) < config.min_wall_m || std::hypot(sum_cos, sum_sin) < config.min_agreement * length)
+  if (length / static_cast<double>(k) < config.min_wall_m || mean.Agreement() < config.min_agreement * length)
     return std::nullopt;
-  return std::atan2(sum_sin, sum_cos) / 4.0;
+  return mean.Mean();
 }
 
 }  // namespace rslam::odometry
