@@ -29,6 +29,9 @@ bool Blocks(const GridView& occupancy, int cx, int cy) {
 // Plans made again within one PlanFrom because one of their own moves passed an obstacle.
 constexpr int kMaxReplansForBlockedMoves = 20;
 
+// Ways back driven along the trail (ExplorationPlanner::RecordMove), in all.
+constexpr int kMaxWayBacks = 5;
+
 constexpr int kNeighbourDx[8] = {1, 0, -1, 0, 1, -1, -1, 1};
 constexpr int kNeighbourDy[8] = {0, 1, 0, -1, 1, 1, -1, -1};
 
@@ -88,6 +91,54 @@ void ExplorationPlanner::RecordPirouette(const Pose2D& where) {
   blocking_obstacles_.clear();  // the grid has just been looked at all round
 }
 
+void ExplorationPlanner::RecordMove(const Pose2D& end) {
+  if (!IsFinite(end)) throw std::invalid_argument("move end pose is not finite");
+  if (config_.way_back_moves == 0) return;
+  trail_.push_back(end);
+  if (trail_.size() > static_cast<size_t>(config_.way_back_moves)) trail_.erase(trail_.begin());
+}
+
+std::optional<Plan> ExplorationPlanner::WayBack(const GridView& occupancy, const CoarseGrid& cs,
+                                                const std::vector<int32_t>& cost, const Pose2D& robot) {
+  if (way_backs_ >= kMaxWayBacks) return std::nullopt;
+  for (size_t k = trail_.size(); k-- > 0;) {
+    const int x = cs.CellX(trail_[k].x), y = cs.CellY(trail_[k].y);
+    if (!cs.Contains(x, y) || cost[static_cast<size_t>(y) * cs.width + x] == kUnreachable) continue;
+    Plan plan;
+    Pose2D at = robot;
+    // Pose by pose back to trail_[k], skipping ahead to the earliest pose a move that passes look
+    // before you move reaches (the robot often wandered in the pocket before it was shut in).
+    for (size_t i = trail_.size(); i-- > k;) {
+      const auto move_to = [&](size_t j) {
+        const double heading = std::atan2(trail_[j].y - at.y, trail_[j].x - at.x);
+        return std::pair{Pose2D{at.x, at.y, heading}, std::hypot(trail_[j].x - at.x, trail_[j].y - at.y)};
+      };
+      for (size_t j = k; j < i; ++j) {
+        const auto [from, distance] = move_to(j);
+        if (IsPathClear(occupancy, from, distance)) {
+          i = j;
+          break;
+        }
+      }
+      const auto [from, distance] = move_to(i);
+      if (distance < 0.25 * cs.cell_size_m) continue;
+      const double turn = WrapAngle(from.theta - at.theta);
+      if (std::abs(turn) > 1e-9) plan.commands.push_back({MotionCommand::Kind::kRotate, turn, 0.0, 0});
+      plan.commands.push_back({MotionCommand::Kind::kMove, 0.0, distance, 0});
+      at = {trail_[i].x, trail_[i].y, from.theta};
+    }
+    if (plan.commands.empty()) continue;  // that pose is where the robot stands
+    ++way_backs_;
+    plan.way_back = true;
+    plan.has_target = true;
+    plan.target = at;
+    plan.reason = "no unknown space is reachable from here, but some is from where the robot was " +
+                  std::to_string(trail_.size() - k) + " moves ago: driving back along its trail";
+    return plan;
+  }
+  return std::nullopt;
+}
+
 bool ExplorationPlanner::IsSetAside(int x, int y) const {
   return std::any_of(set_aside_.begin(), set_aside_.end(),
                      [&](const SetAsideGoal& g) { return g.x == x && g.y == y; });
@@ -116,6 +167,7 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
       throw std::invalid_argument("blocking obstacle is not finite");
     blocking_obstacles_.push_back(*obstacle);
   }
+  if (plan.way_back) trail_.clear();  // the way back is not what it was
   if (plan.goal_x < 0) return;
   // Every max_blocked_attempts refusals set the goal aside (PlanFrom may try it again); a goal in
   // the margin (margin_goals) at the first, for good: the way into the margin is narrow. On the
@@ -247,6 +299,35 @@ std::vector<std::pair<double, double>> ExplorationPlanner::Straighten(
   return out;
 }
 
+bool ExplorationPlanner::AddUncertainFrontierGoals(const CoarseGrid& cs, std::vector<uint8_t>& goal) const {
+  // Flood from the unknown cells into the uncertain ones (8-connected); every uncertain cell
+  // reached is a goal.
+  const int w = cs.width;
+  std::vector<uint8_t> seen(cs.cells.size(), 0);
+  std::vector<size_t> queue;
+  for (size_t i = 0; i < cs.cells.size(); ++i)
+    if (cs.cells[i] == CellClass::kUnknown) {
+      seen[i] = 1;
+      queue.push_back(i);
+    }
+  bool added = false;
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int x = static_cast<int>(queue[head] % w), y = static_cast<int>(queue[head] / w);
+    for (int k = 0; k < 8; ++k) {
+      const int nx = x + kNeighbourDx[k], ny = y + kNeighbourDy[k];
+      if (!cs.Contains(nx, ny)) continue;
+      const size_t j = static_cast<size_t>(ny) * w + nx;
+      if (seen[j] || cs.cells[j] != CellClass::kUncertain) continue;
+      seen[j] = 1;
+      queue.push_back(j);
+      if (IsSetAside(nx, ny)) continue;
+      goal[j] = 1;
+      added = true;
+    }
+  }
+  return added;
+}
+
 Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
   if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
   ExplorerConfig grid_config = config_;
@@ -305,6 +386,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   std::optional<Plan> first_blocked;  // returned if keeping off its obstacle leaves nothing to explore
   bool squeezing = false;             // planning through the dilation margin (below)
   bool margin_goals_added = false;    // ... and to unknown space inside it
+  bool uncertain_frontier_added = false;  // uncertain cells that border unknown space are goals
   // An off-centre robot first steps to the centre of its cell, unless that step itself comes
   // closer to an obstacle than the robot already is (it stands off-centre beside a wall).
   const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
@@ -389,6 +471,17 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
           if (cs.margin_goal[i] && !IsSetAside(static_cast<int>(i % w), static_cast<int>(i / w))) goal[i] = 1;
         continue;
       }
+      // Still nothing: unseen space may lie behind cells seen too seldom to be called free or
+      // occupied (the far edge of what the camera saw from afar). Without
+      // uncertain_cells_are_goals they are neither goals nor driven through, so a frontier made
+      // wholly of them hides everything behind it (a demo run called exploration complete after
+      // 21 s at coverage 0.35: the middle of the room lay behind such a band). Those that join
+      // unknown space through uncertain cells become goals: the robot goes to the nearest and looks.
+      if (config_.uncertain_frontier_goals && !uncertain_frontier_added) {
+        uncertain_frontier_added = true;
+        if (AddUncertainFrontierGoals(cs, goal)) continue;
+      }
+      if (std::optional<Plan> back = WayBack(occupancy, cs, cost, robot)) return *back;
       if (config_.finishing_cell_factor > 0 && !finishing_) {
         StartFinishing();
         Plan finer = PlanFrom(occupancy, robot);
@@ -480,8 +573,9 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
                                config_.pirouette_steps});
     plan.has_target = true;
     plan.target = {x, y, theta};
-    plan.reason = "to the nearest unknown space, " + std::to_string(path.size() - 1) + " cells away" +
-                  (squeezing ? " through the margin" : "");
+    plan.reason = std::string(uncertain_frontier_added ? "to uncertain space bordering unknown, "
+                                                       : "to the nearest unknown space, ") +
+                  std::to_string(path.size() - 1) + " cells away" + (squeezing ? " through the margin" : "");
     // Look before you move, at planning time: a move of the plan that the caller's check would
     // refuse (the escape through the dilation margin, or the first step from an off-centre robot,
     // can pass closer to a wall than the robot radius) would count against goal after goal, each
@@ -561,6 +655,8 @@ proto::ExplorerState ExplorationPlanner::ToProto() const {
     SavePose(*last_pirouette_, state.mutable_last_pirouette());
   }
   state.set_finishing(finishing_);
+  for (const Pose2D& p : trail_) SavePose(p, state.add_trail());
+  state.set_way_backs(way_backs_);
   return state;
 }
 
@@ -589,11 +685,21 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
     last = LoadPose(state.last_pirouette());
     if (!IsFinite(*last)) throw std::invalid_argument("explorer state: last pirouette pose not finite");
   }
+  std::vector<Pose2D> trail;
+  for (const auto& p : state.trail()) {
+    trail.push_back(LoadPose(p));
+    if (!IsFinite(trail.back())) throw std::invalid_argument("explorer state: trail pose not finite");
+  }
+  if (state.way_backs() < 0) throw std::invalid_argument("explorer state: negative way-back count");
+  if (trail.size() > static_cast<size_t>(config_.way_back_moves))
+    trail.erase(trail.begin(), trail.end() - config_.way_back_moves);
   set_aside_ = std::move(set_aside);
   blocked_attempts_ = std::move(blocked);
   blocking_obstacles_ = std::move(obstacles);
   last_pirouette_ = last;
   finishing_ = state.finishing();
+  trail_ = std::move(trail);
+  way_backs_ = state.way_backs();
 }
 
 }  // namespace rslam::explorer

@@ -29,6 +29,13 @@ struct ExplorerConfig {
   // more in five), but a wall drawn with holes offers 20-40 such cells, each a trip and a look,
   // and four of the six runs reached the demo's 280-s limit (tools/demo/MEASUREMENTS.md).
   bool margin_goals = false;
+  // ... and if nothing is reachable even so, uncertain cells that join unknown space through
+  // uncertain cells are goals: a frontier made wholly of cells seen too seldom to class (the far
+  // edge of the camera's view) otherwise hides all that lies behind it. No effect with
+  // uncertain_cells_are_goals.
+  bool uncertain_frontier_goals = true;
+  // Straight moves remembered for the way back (ExplorationPlanner::RecordMove; 0 = off).
+  int way_back_moves = 40;
   bool straighten_paths = true;       // cut the grid path's corners where a straight move is clear
   // Before calling exploration complete, look once more on a finer exploration grid (this many
   // occupancy cells a side, dividing coarse_cell_factor; 0 = off) and explore on it to the end.
@@ -57,6 +64,10 @@ struct ExplorerConfig {
       "when no unknown space is reachable over free cells, plan through the dilation margin (moves still keep the radius)");
     v("margin_goals", margin_goals,
       "when even squeezing through the margin reaches no unknown space, its cells that hold some (and no obstacle) are goals");
+    v("uncertain_frontier_goals", uncertain_frontier_goals,
+      "when no unknown space is reachable, uncertain cells that join some through uncertain cells are goals");
+    v("way_back_moves", way_back_moves,
+      "moves remembered to drive back along when the grid shuts the robot in (0 = off)");
     v("straighten_paths", straighten_paths,
       "skip a waypoint of the grid path where the straight move past it stays on the path's cells and is clear");
     v("finishing_cell_factor", finishing_cell_factor,
@@ -75,6 +86,7 @@ struct ExplorerConfig {
     Require(finishing_cell_factor == 0 || (finishing_cell_factor >= 1 && finishing_cell_factor < coarse_cell_factor &&
                                            coarse_cell_factor % finishing_cell_factor == 0),
             "finishing_cell_factor", "must be 0 or a divisor of coarse_cell_factor smaller than it");
+    Require(way_back_moves >= 0 && way_back_moves <= 1000, "way_back_moves", "must be 0..1000");
     Require(finishing_min_unknown_cells >= 1, "finishing_min_unknown_cells", "must be >= 1");
   }
 };

@@ -190,6 +190,7 @@ class ExplorerNode::Controller {
         awaiting_.reset();
         expected_pose_ = Apply(expected_pose_, done);
         ++next_command_;
+        if (done.kind == MotionCommand::Kind::kMove) planner_.RecordMove(expected_pose_);
         if (done.kind == MotionCommand::Kind::kPirouette && pose_) planner_.RecordPirouette(RobotPose());
         // The next plan needs the grid of what the robot just saw: after a pirouette, and after
         // the last move of a plan that ends without one (pirouette_at_goal false).
@@ -207,6 +208,7 @@ class ExplorerNode::Controller {
           const Pose2D at = RobotPose();
           spdlog::info("the base stopped command {} short: bumped at ({:.2f}, {:.2f}, {:.2f})", feedback.command_seq,
                        at.x, at.y, at.theta);
+          planner_.RecordMove(at);
           if (plan_) planner_.ReportBump(*plan_, at, backwards);
         } else {
           spdlog::info("the base stopped command {} short", feedback.command_seq);
@@ -277,7 +279,7 @@ class ExplorerNode::Controller {
                    goal_x_m_, goal_y_m_);
     }
     const MotionCommand& command = plan_->commands[next_command_];
-    const auto obstacle = command.kind == MotionCommand::Kind::kMove
+    const auto obstacle = command.kind == MotionCommand::Kind::kMove && !plan_->way_back
                               ? planner_.ObstacleOnPath(view, expected_pose_, command.distance_m)
                               : std::nullopt;
     if (obstacle) {

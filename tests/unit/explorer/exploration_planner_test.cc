@@ -760,6 +760,148 @@ TEST(ExplorationPlannerTest, TheFinerGridMustDivideTheCoarseOne) {
   EXPECT_THROW(ExplorationPlanner{config}, ConfigError);
 }
 
+TEST(ExplorationPlannerTest, UnknownSpaceBehindABandOfUncertainCellsIsLookedAtBeforeCallingItComplete) {
+  // A known room; in its middle a patch never seen, ringed by cells seen too seldom to class (the
+  // far edge of what the camera saw from afar), two exploration cells thick.
+  TestGrid grid(40, 40, 0);
+  for (int y = 21; y < 35; ++y)
+    for (int x = 21; x < 35; ++x) grid.Set(x, y, x >= 25 && x < 31 && y >= 25 && y < 31 ? -1 : 60);
+  ExplorerConfig config = Config();
+  config.uncertain_cells_are_goals = false;
+  const Pose2D robot{0.5, 0.5, 0.0};
+  config.uncertain_frontier_goals = false;
+  EXPECT_TRUE(ExplorationPlanner(config).PlanFrom(grid.View(), robot).complete);
+  config.uncertain_frontier_goals = true;
+  ExplorationPlanner planner(config);
+  const Plan plan = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(plan.complete) << plan.reason;
+  EXPECT_NE(plan.reason.find("uncertain space bordering unknown"), std::string::npos) << plan.reason;
+  EXPECT_TRUE(plan.goal_x >= 10 && plan.goal_x <= 11 && plan.goal_y >= 10 && plan.goal_y <= 16) << plan.goal_x << ", "
+                                                                                                  << plan.goal_y;
+  ExpectMovesClear(planner, grid.View(), plan, robot);
+  // Looked at and still so, the band's cells are set aside one by one and exploration ends.
+  Pose2D at = plan.target;
+  int plans = 0;
+  for (Plan next = plan; !next.complete && plans < 200; ++plans) {
+    at = next.target;
+    planner.RecordPirouette(at);
+    next = planner.PlanFrom(grid.View(), at);
+  }
+  EXPECT_LT(plans, 200);
+  // Without the patch never seen, the band is no goal.
+  for (int y = 25; y < 31; ++y)
+    for (int x = 25; x < 31; ++x) grid.Set(x, y, 60);
+  EXPECT_TRUE(ExplorationPlanner(config).PlanFrom(grid.View(), robot).complete);
+}
+
+// A room (x < 5 m) with unknown space in its west, and a door 1 m wide at x = 5 m into a known
+// room east of it.
+TestGrid TwoRoomsWithADoor() {
+  TestGrid grid(200, 60, 0);
+  for (int y = 0; y < 60; ++y)
+    if (y < 20 || y >= 40) grid.Set(100, y, 100);
+  for (int y = 10; y < 50; ++y)
+    for (int x = 10; x < 20; ++x) grid.Set(x, y, -1);
+  return grid;
+}
+
+// The poses where a robot's moves ended as it drove from the west room through the door.
+void DriveThroughTheDoor(ExplorationPlanner& planner) {
+  for (const Pose2D& p : {Pose2D{2.0, 1.5, 0.0}, Pose2D{4.0, 1.5, 0.0}, Pose2D{5.0, 1.5, 0.0}, Pose2D{6.0, 1.5, 0.0},
+                          Pose2D{8.0, 1.5, 0.0}, Pose2D{8.0, 2.2, M_PI / 2}})
+    planner.RecordMove(p);
+}
+
+TEST(ExplorationPlannerTest, DrivesBackTheWayItCameWhenTheGridShutsItIn) {
+  // The robot drove through the door into the east room; then the grid drew the wall across
+  // the door (a map correction drew it twice). From the east room nothing unknown is reachable,
+  // from where the robot was before the door there is.
+  TestGrid grid = TwoRoomsWithADoor();
+  for (int y = 20; y < 40; ++y) grid.Set(100, y, 100);
+  const Pose2D robot{8.0, 2.2, M_PI / 2};
+  ExplorerConfig config = Config();
+  config.robot_radius_m = 0.1;
+  config.way_back_moves = 0;
+  ExplorationPlanner off(config);
+  DriveThroughTheDoor(off);
+  EXPECT_TRUE(off.PlanFrom(grid.View(), robot).complete);
+
+  config.way_back_moves = 40;
+  ExplorationPlanner planner(config);
+  EXPECT_TRUE(planner.PlanFrom(grid.View(), robot).complete);  // no trail yet
+  DriveThroughTheDoor(planner);
+  const Plan back = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(back.complete) << back.reason;
+  EXPECT_TRUE(back.way_back);
+  EXPECT_NE(back.reason.find("trail"), std::string::npos) << back.reason;
+  EXPECT_EQ(back.goal_x, -1);
+  EXPECT_NEAR(back.target.x, 4.0, 1e-9);  // the latest pose west of the door
+  EXPECT_NEAR(back.target.y, 1.5, 1e-9);
+  // Straight on to (6, 1.5), the first pose a clear move reaches, then through the door.
+  Pose2D at = robot;
+  std::vector<std::pair<double, double>> stops;
+  for (const MotionCommand& c : back.commands) {
+    if (c.kind == Kind::kRotate) at.theta += c.angle_rad;
+    if (c.kind != Kind::kMove) continue;
+    at = {at.x + c.distance_m * std::cos(at.theta), at.y + c.distance_m * std::sin(at.theta), at.theta};
+    stops.emplace_back(at.x, at.y);
+  }
+  ASSERT_EQ(stops.size(), 3u);
+  EXPECT_NEAR(stops[0].first, 6.0, 1e-9);
+  EXPECT_NEAR(stops[1].first, 5.0, 1e-9);
+  EXPECT_NEAR(stops[2].first, 4.0, 1e-9);
+  EXPECT_NEAR(stops[2].second, 1.5, 1e-9);
+  // There the plans go on to the unknown space as ever.
+  const Plan on = planner.PlanFrom(grid.View(), back.target);
+  ASSERT_FALSE(on.complete) << on.reason;
+  EXPECT_FALSE(on.way_back);
+  EXPECT_GE(on.goal_x, 0);
+
+  // Saved and loaded, the trail is kept; a way back blocked on the way forgets it.
+  proto::ExplorerState saved;
+  ASSERT_TRUE(saved.ParseFromString(planner.ToProto().SerializeAsString()));
+  ExplorationPlanner restarted(config);
+  restarted.LoadProto(saved);
+  const Plan again = restarted.PlanFrom(grid.View(), robot);
+  ASSERT_TRUE(again.way_back) << again.reason;
+  restarted.ReportBump(again, {6.0, 1.5, M_PI}, false);
+  EXPECT_TRUE(restarted.PlanFrom(grid.View(), {6.0, 1.5, M_PI}).complete);
+  saved.mutable_trail(0)->set_y(NAN);
+  EXPECT_THROW(restarted.LoadProto(saved), std::invalid_argument);
+  EXPECT_THROW(restarted.RecordMove({INFINITY, 0.0, 0.0}), std::invalid_argument);
+}
+
+TEST(ExplorationPlannerTest, WaysBackAreFewAndOnlyWhereTheTrailReachesUnknownSpace) {
+  TestGrid grid = TwoRoomsWithADoor();
+  for (int y = 20; y < 40; ++y) grid.Set(100, y, 100);
+  ExplorerConfig config = Config();
+  config.robot_radius_m = 0.1;
+  const Pose2D robot{8.0, 2.2, M_PI / 2};
+  {
+    // Everything seen: exploration is complete whatever the trail.
+    TestGrid known = grid;
+    for (int y = 10; y < 50; ++y)
+      for (int x = 10; x < 20; ++x) known.Set(x, y, 0);
+    ExplorationPlanner planner(config);
+    DriveThroughTheDoor(planner);
+    EXPECT_TRUE(planner.PlanFrom(known.View(), robot).complete);
+  }
+  // A robot shut in again and again drives back five times in all, then calls it complete.
+  ExplorationPlanner planner(config);
+  int way_backs = 0;
+  for (int i = 0; i < 10; ++i) {
+    DriveThroughTheDoor(planner);
+    const Plan plan = planner.PlanFrom(grid.View(), robot);
+    if (plan.complete) break;
+    EXPECT_TRUE(plan.way_back) << plan.reason;
+    ++way_backs;
+  }
+  EXPECT_EQ(way_backs, 5);
+  ExplorerConfig bad = config;
+  bad.way_back_moves = -1;
+  EXPECT_THROW(ExplorationPlanner{bad}, ConfigError);
+}
+
 // Heading of a plan's first straight move from `from`; none without one.
 std::optional<double> FirstMoveHeading(const Plan& plan, Pose2D from) {
   for (const MotionCommand& c : plan.commands) {
