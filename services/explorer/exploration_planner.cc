@@ -91,11 +91,15 @@ void ExplorationPlanner::RecordPirouette(const Pose2D& where) {
   blocking_obstacles_.clear();  // the grid has just been looked at all round
 }
 
-void ExplorationPlanner::RecordMove(const Pose2D& end) {
-  if (!IsFinite(end)) throw std::invalid_argument("move end pose is not finite");
+void ExplorationPlanner::RecordMove(const Pose2D& from, const Pose2D& to) {
+  if (!IsFinite(from) || !IsFinite(to)) throw std::invalid_argument("move pose is not finite");
   if (config_.way_back_moves == 0) return;
-  trail_.push_back(end);
-  if (trail_.size() > static_cast<size_t>(config_.way_back_moves)) trail_.erase(trail_.begin());
+  constexpr double kSamePlace = 0.05;  // m
+  if (trail_.empty() || std::hypot(trail_.back().x - from.x, trail_.back().y - from.y) > kSamePlace)
+    trail_.push_back(from);
+  trail_.push_back(to);
+  if (trail_.size() > static_cast<size_t>(config_.way_back_moves))
+    trail_.erase(trail_.begin(), trail_.end() - config_.way_back_moves);
 }
 
 std::optional<Plan> ExplorationPlanner::WayBack(const GridView& occupancy, const CoarseGrid& cs,

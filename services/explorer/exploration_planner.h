@@ -93,15 +93,15 @@ class ExplorationPlanner {
 
   // The robot has finished a pirouette at this pose.
   void RecordPirouette(const Pose2D& where);
-  // The robot has finished a straight move (or was stopped on one) at this pose: the last
-  // way_back_moves such poses are its trail. When no unknown space is reachable from where the
+  // The robot has driven straight from `from` to `to` (the end of a move, or where the base
+  // stopped it): the last way_back_moves such poses are its trail. When no unknown space is reachable from where the
   // robot stands but some is from a pose of its trail, the plan drives back along the trail to
   // the latest such pose instead of calling exploration complete: the grid can draw a wall
   // across the way the robot came in (a map correction moved a wall, or drew it twice), shutting
   // it in (a demo run called exploration complete after 21 s at coverage 0.35, shut in the
   // passage it had just driven into). A way back blocked on the way forgets the trail; at most
   // kMaxWayBacks are driven.
-  void RecordMove(const Pose2D& end);
+  void RecordMove(const Pose2D& from, const Pose2D& to);
   // A move of this plan was blocked when looked at; after max_blocked_attempts its goal is set aside.
   // obstacle (world x, y; from ObstacleOnPath): until the next pirouette, plans keep their centre
   // line farther than the robot radius from it. Without that the coarse plan (its cells are

@@ -34,7 +34,8 @@ struct ExplorerConfig {
   // edge of the camera's view) otherwise hides all that lies behind it. No effect with
   // uncertain_cells_are_goals.
   bool uncertain_frontier_goals = true;
-  // Straight moves remembered for the way back (ExplorationPlanner::RecordMove; 0 = off).
+  // Poses where straight moves started and ended remembered for the way back
+  // (ExplorationPlanner::RecordMove; 0 = off).
   int way_back_moves = 40;
   bool straighten_paths = true;       // cut the grid path's corners where a straight move is clear
   // Before calling exploration complete, look once more on a finer exploration grid (this many

@@ -10,6 +10,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "common/math/angle.h"
 #include "common/persistence/state_file.h"
@@ -188,9 +189,9 @@ class ExplorerNode::Controller {
       case msg::MotionState::MOTION_DONE: {
         const MotionCommand done = awaiting_->command;
         awaiting_.reset();
-        expected_pose_ = Apply(expected_pose_, done);
+        const Pose2D from = std::exchange(expected_pose_, Apply(expected_pose_, done));
         ++next_command_;
-        if (done.kind == MotionCommand::Kind::kMove) planner_.RecordMove(expected_pose_);
+        if (done.kind == MotionCommand::Kind::kMove) planner_.RecordMove(from, expected_pose_);
         if (done.kind == MotionCommand::Kind::kPirouette && pose_) planner_.RecordPirouette(RobotPose());
         // The next plan needs the grid of what the robot just saw: after a pirouette, and after
         // the last move of a plan that ends without one (pirouette_at_goal false).
@@ -208,7 +209,7 @@ class ExplorerNode::Controller {
           const Pose2D at = RobotPose();
           spdlog::info("the base stopped command {} short: bumped at ({:.2f}, {:.2f}, {:.2f})", feedback.command_seq,
                        at.x, at.y, at.theta);
-          planner_.RecordMove(at);
+          planner_.RecordMove(expected_pose_, at);
           if (plan_) planner_.ReportBump(*plan_, at, backwards);
         } else {
           spdlog::info("the base stopped command {} short", feedback.command_seq);

@@ -13,6 +13,7 @@
 #include "common/bus/participant.h"
 #include "common/bus/publisher.h"
 #include "common/bus/subscriber.h"
+#include "common/math/pose2d.h"
 #include "common/persistence/state_file.h"
 #include "services/explorer/proto/explorer_node_state.pb.h"
 #include "tests/support/child_process.h"
@@ -234,6 +235,66 @@ TEST_F(ExplorerServiceTest, LooksBeforeMovingAndDoesNotDriveIntoANewWall) {
   ASSERT_TRUE(next) << service->Output();
   EXPECT_NE(next->kind, msg::MotionKind::MOTION_MOVE)
       << "drove into the wall it could see: turned " << turn->angle_rad << ", then moved " << next->distance_m;
+}
+
+// Two rooms joined by a door 0.6 m wide in a wall at x = 0.5 m (the walls round them at
+// x = -1.25 and 1.4 m, |y| = 0.95 m). `west_unknown`: the west room unknown beyond x < -0.7 m;
+// `east_unknown`: the east room unknown beyond x > 0.8 m; `door_drawn_shut`: the grid shows
+// the wall across the door as well.
+msg::OccupancyGrid TwoRooms(bool west_unknown, bool east_unknown, bool door_drawn_shut) {
+  msg::OccupancyGrid g = EmptyGrid(-1);
+  for (int cy = 0; cy < 60; ++cy) {
+    for (int cx = 0; cx < 60; ++cx) {
+      const double x = -1.5 + (cx + 0.5) * 0.05, y = -1.5 + (cy + 0.5) * 0.05;
+      int8_t& cell = g.cells[cy * 60 + cx];
+      if (x < -1.3 || x > 1.45 || std::abs(y) > 1.0) continue;  // unknown
+      if (x < -1.25 || x > 1.4 || std::abs(y) > 0.95 || (x > 0.5 && x < 0.55 && (door_drawn_shut || std::abs(y) > 0.3)))
+        cell = 100;
+      else if (!(west_unknown && x < -0.7) && !(east_unknown && x > 0.8))
+        cell = 0;
+    }
+  }
+  return g;
+}
+
+TEST_F(ExplorerServiceTest, DrivesBackThroughADoorTheGridDrewShutBehindIt) {
+  auto service = Start();
+  // Plays the base: every command is done as asked; the robot's pose follows.
+  Pose2D robot{-0.4, 0.0, 0.0};
+  const auto play = [&](const msg::MotionCommand& c) {
+    if (c.kind == msg::MotionKind::MOTION_ROTATE) robot.theta += c.angle_rad;
+    if (c.kind == msg::MotionKind::MOTION_MOVE)
+      robot = {robot.x + c.distance_m * std::cos(robot.theta), robot.y + c.distance_m * std::sin(robot.theta),
+               robot.theta};
+    pose_pub_->Publish(RobotAt(robot.x, robot.y, robot.theta));
+    Feedback(c.command_seq, msg::MotionState::MOTION_DONE);
+  };
+  pose_pub_->Publish(RobotAt(robot.x, robot.y, robot.theta));
+  grid_pub_->Publish(TwoRooms(/*west_unknown=*/false, /*east_unknown=*/true, /*door_drawn_shut=*/false));
+  // Through the door to the unknown east.
+  std::optional<msg::MotionCommand> command;
+  for (int i = 0; i < 20 && robot.x < 0.55; ++i) {
+    command = NextCommand();
+    ASSERT_TRUE(command) << service->Output();
+    ASSERT_NE(command->kind, msg::MotionKind::MOTION_STOP) << service->Output();
+    play(*command);
+  }
+  ASSERT_GT(robot.x, 0.55) << service->Output();
+  // Now the east room is known, the map draws the wall across the door, and the west room has
+  // unknown space after all. The explorer drives back through the door it came by.
+  const msg::OccupancyGrid shut = TwoRooms(/*west_unknown=*/true, /*east_unknown=*/false, /*door_drawn_shut=*/true);
+  bool crossed = false;
+  for (int i = 0; i < 30 && !crossed; ++i) {
+    grid_pub_->Publish(shut);
+    command = NextCommand();
+    ASSERT_TRUE(command) << service->Output();
+    ASSERT_NE(command->kind, msg::MotionKind::MOTION_STOP) << "called exploration complete in the east room\n"
+                                                           << service->Output();
+    const double x0 = robot.x;
+    play(*command);
+    crossed = x0 > 0.55 && robot.x < 0.5;
+  }
+  EXPECT_TRUE(crossed) << service->Output();
 }
 
 TEST_F(ExplorerServiceTest, UnansweredCommandIsPlannedAgainAfterTheTimeout) {

@@ -805,11 +805,13 @@ TestGrid TwoRoomsWithADoor() {
   return grid;
 }
 
-// The poses where a robot's moves ended as it drove from the west room through the door.
+// The moves of a robot that drove from the west room through the door.
 void DriveThroughTheDoor(ExplorationPlanner& planner) {
-  for (const Pose2D& p : {Pose2D{2.0, 1.5, 0.0}, Pose2D{4.0, 1.5, 0.0}, Pose2D{5.0, 1.5, 0.0}, Pose2D{6.0, 1.5, 0.0},
-                          Pose2D{8.0, 1.5, 0.0}, Pose2D{8.0, 2.2, M_PI / 2}})
-    planner.RecordMove(p);
+  planner.RecordMove({2.0, 1.5, 0.0}, {4.0, 1.5, 0.0});
+  planner.RecordMove({4.0, 1.5, 0.0}, {5.0, 1.5, 0.0});
+  planner.RecordMove({5.02, 1.5, 0.0}, {6.0, 1.5, 0.0});  // the next plan began where this one ended
+  planner.RecordMove({6.0, 1.5, 0.0}, {8.0, 1.5, 0.0});
+  planner.RecordMove({8.0, 1.5, M_PI / 2}, {8.0, 2.2, M_PI / 2});
 }
 
 TEST(ExplorationPlannerTest, DrivesBackTheWayItCameWhenTheGridShutsItIn) {
@@ -868,7 +870,7 @@ TEST(ExplorationPlannerTest, DrivesBackTheWayItCameWhenTheGridShutsItIn) {
   EXPECT_TRUE(restarted.PlanFrom(grid.View(), {6.0, 1.5, M_PI}).complete);
   saved.mutable_trail(0)->set_y(NAN);
   EXPECT_THROW(restarted.LoadProto(saved), std::invalid_argument);
-  EXPECT_THROW(restarted.RecordMove({INFINITY, 0.0, 0.0}), std::invalid_argument);
+  EXPECT_THROW(restarted.RecordMove({INFINITY, 0.0, 0.0}, {0.0, 0.0, 0.0}), std::invalid_argument);
 }
 
 TEST(ExplorationPlannerTest, WaysBackAreFewAndOnlyWhereTheTrailReachesUnknownSpace) {
