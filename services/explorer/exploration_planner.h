@@ -10,8 +10,10 @@
 //     through the margin itself leads to unknown space (squeeze_through_margin: doors narrower
 //     than the robot plus both margins), or to unknown space inside the margin (margin_goals: a
 //     door's far side), or behind uncertain cells (uncertain_frontier_goals: unseen space
-//     bordered by cells seen too seldom to class); or unless the finer grid of finishing_cell_factor, on
-//     which the planner then goes on to the end, still reaches unknown space;
+//     bordered by cells seen too seldom to class); or unless a place the robot drove through
+//     lately reaches unknown space (the way back, RecordMove); or unless the finer grid of
+//     finishing_cell_factor, on which the planner then goes on to the end, still reaches unknown
+//     space;
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
 //     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees;
@@ -94,16 +96,17 @@ class ExplorationPlanner {
   // The robot has finished a pirouette at this pose.
   void RecordPirouette(const Pose2D& where);
   // The robot has driven straight from `from` to `to` (the end of a move, or where the base
-  // stopped it): the last way_back_moves such poses are its trail. When no unknown space is reachable from where the
-  // robot stands but some is from a pose of its trail, the plan drives back along the trail to
-  // the latest such pose instead of calling exploration complete: the grid can draw a wall
-  // across the way the robot came in (a map correction moved a wall, or drew it twice), shutting
-  // it in (a demo run called exploration complete after 21 s at coverage 0.35, shut in the
-  // passage it had just driven into). A way back blocked on the way forgets the trail; at most
-  // kMaxWayBacks are driven.
+  // stopped it): the last way_back_moves such poses are its trail. When no unknown space is
+  // reachable from where the robot stands but some is from a pose of its trail, the plan drives
+  // back along the trail to the latest such pose instead of calling exploration complete: the
+  // grid can draw a wall across the way the robot came in (a map correction moved a wall, or drew
+  // it twice), shutting it in (a demo run called exploration complete after 21 s at coverage
+  // 0.35, shut in the passage it had just driven into). A way back blocked on the way forgets
+  // the trail; at most five are driven in all.
   void RecordMove(const Pose2D& from, const Pose2D& to);
-  // A move of this plan was blocked when looked at; after max_blocked_attempts its goal is set aside.
-  // obstacle (world x, y; from ObstacleOnPath): until the next pirouette, plans keep their centre
+  // A move of this plan was blocked when looked at; after max_blocked_attempts such refusals
+  // within 1.5 m of where the plan ends (or without `obstacle`), three times as many farther off,
+  // its goal is set aside. obstacle (world x, y; from ObstacleOnPath): until the next pirouette, plans keep their centre
   // line farther than the robot radius from it. Without that the coarse plan (its cells are
   // classed by the grid cells inside them) can send every goal through the same gap the exact
   // check refuses, and each goal is set aside in turn until exploration calls itself complete.

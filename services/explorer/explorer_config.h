@@ -18,7 +18,7 @@ struct ExplorerConfig {
   bool uncertain_cells_are_goals = true;
   int pirouette_steps = 12;           // paper 003: 12 x 30 degrees
   bool pirouette_at_goal = true;      // paper 003: every plan ends with a pirouette
-  int max_blocked_attempts = 3;       // look-before-you-move failures before a goal is set aside
+  int max_blocked_attempts = 3;       // refused moves near a goal before it is set aside (far ones: 3x)
   int blocked_goal_retries = 1;       // times such a goal is tried again before exploration ends
   bool squeeze_through_margin = true; // before calling exploration complete, plan through the margin
   // ... and if even that reaches no unknown space, take for goals the margin's cells that hold
@@ -36,7 +36,7 @@ struct ExplorerConfig {
   bool uncertain_frontier_goals = true;
   // Poses where straight moves started and ended remembered for the way back
   // (ExplorationPlanner::RecordMove; 0 = off).
-  int way_back_moves = 40;
+  int way_back_moves = 20;
   bool straighten_paths = true;       // cut the grid path's corners where a straight move is clear
   // Before calling exploration complete, look once more on a finer exploration grid (this many
   // occupancy cells a side, dividing coarse_cell_factor; 0 = off) and explore on it to the end.
@@ -58,7 +58,7 @@ struct ExplorerConfig {
     v("pirouette_at_goal", pirouette_at_goal,
       "end every plan with a pirouette (paper 003); false: only where unknown space is still next to the robot");
     v("max_blocked_attempts", max_blocked_attempts,
-      "blocked moves towards one goal before it is set aside");
+      "blocked moves towards one goal before it is set aside (within 1.5 m of where its plan ends; three times as many farther off)");
     v("blocked_goal_retries", blocked_goal_retries,
       "times goals set aside after blocked moves are tried again (after a look all round) before exploration ends");
     v("squeeze_through_margin", squeeze_through_margin,

@@ -12,13 +12,14 @@
 // One command is outstanding at a time; the next goes out after its DONE or BLOCKED (or after
 // feedback_timeout_s without either: the plan is dropped and made again). Before each straight
 // move the path is checked against the latest grid and, if blocked, the goal is reported blocked
-// and a new plan made (not on a way back: ExplorationPlanner::RecordMove). A plan ends with a pirouette (unless planner.pirouette_at_goal is false);
-// after a plan's last command (and after a blocked move) the explorer waits for a grid made
-// after it before planning again. When no reachable unknown
-// remains it sends STOP and reports EXPLORATION_COMPLETE. When the service stops (SIGTERM) with
-// a command outstanding, it sends STOP and reports EXPLORATION_STOPPED. The planner state (goals set aside,
-// blocked counts, obstacles found by refused moves, last pirouette) and the command numbering
-// persist in <state_dir>/explorer.pb.
+// and a new plan made (not on a way back: ExplorationPlanner::RecordMove). A plan ends with a
+// pirouette (unless planner.pirouette_at_goal is false); after a plan's last command (and after a
+// blocked move) the explorer waits for a grid made after it before planning again. When no
+// reachable unknown remains it sends STOP and reports EXPLORATION_COMPLETE. When the service
+// stops (SIGTERM) with a command outstanding, it sends STOP and reports EXPLORATION_STOPPED. The
+// planner state (goals set aside, blocked counts, obstacles found by refused moves, last
+// pirouette, the trail of the last moves) and the command numbering persist in
+// <state_dir>/explorer.pb.
 
 #include <memory>
 #include <vector>

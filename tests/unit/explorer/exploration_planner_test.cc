@@ -414,6 +414,34 @@ TEST(ExplorationPlannerTest, GoalBlockedRepeatedlyIsSetAsideAndTriedAgainAfterAL
   EXPECT_TRUE(once.PlanFrom(grid.View(), robot).complete);
 }
 
+TEST(ExplorationPlannerTest, RefusalsFarFromTheGoalCountAThirdAgainstIt) {
+  // The only unknown space is 2.5 m from the robot; moves are refused by obstacles found next to
+  // the robot, far from the goal (the way's trouble, which the next plans keep off), or next to it.
+  TestGrid grid(60, 20, 0);
+  grid.Set(55, 10, -1);
+  ExplorerConfig config = Config();
+  config.max_blocked_attempts = 2;
+  config.blocked_goal_retries = 0;
+  const Pose2D robot{0.25, 0.5, 0.0};
+  ExplorationPlanner planner(config);
+  const Plan plan = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(plan.complete) << plan.reason;
+  ASSERT_TRUE(plan.has_target);
+  ASSERT_GT(plan.target.x, 2.0);
+  for (int i = 0; i < 5; ++i) planner.ReportBlocked(plan, std::pair{0.4, 0.5});
+  EXPECT_TRUE(planner.set_aside_goals().empty()) << "five refusals 2.5 m from the goal set it aside";
+  planner.ReportBlocked(plan, std::pair{0.4, 0.5});
+  ASSERT_EQ(planner.set_aside_goals().size(), 1u);  // six thirds: two refusals' worth
+  EXPECT_NE(planner.set_aside_goals()[0].reason.find("blocked 2 times"), std::string::npos)
+      << planner.set_aside_goals()[0].reason;
+  // Next to the goal, each counts whole.
+  ExplorationPlanner near(config);
+  near.ReportBlocked(plan, std::pair{plan.target.x + 0.1, plan.target.y});
+  EXPECT_TRUE(near.set_aside_goals().empty());
+  near.ReportBlocked(plan, std::pair{plan.target.x + 0.1, plan.target.y});
+  EXPECT_EQ(near.set_aside_goals().size(), 1u);
+}
+
 TEST(ExplorationPlannerTest, GoalsStillUnknownAfterALookAreNotTriedAgain) {
   TestGrid grid(20, 20, 0);
   grid.Set(10, 10, -1);
