@@ -58,7 +58,8 @@ struct ExplorerConfig {
     v("pirouette_at_goal", pirouette_at_goal,
       "end every plan with a pirouette (paper 003); false: only where unknown space is still next to the robot");
     v("max_blocked_attempts", max_blocked_attempts,
-      "blocked moves towards one goal before it is set aside (within 1.5 m of where its plan ends; three times as many farther off)");
+      "blocked moves towards one goal before it is set aside (within 1.5 m of where its plan ends; "
+      "three times as many farther off)");
     v("blocked_goal_retries", blocked_goal_retries,
       "times goals set aside after blocked moves are tried again (after a look all round) before exploration ends");
     v("squeeze_through_margin", squeeze_through_margin,

@@ -248,7 +248,8 @@ msg::OccupancyGrid TwoRooms(bool west_unknown, bool east_unknown, bool door_draw
       const double x = -1.5 + (cx + 0.5) * 0.05, y = -1.5 + (cy + 0.5) * 0.05;
       int8_t& cell = g.cells[cy * 60 + cx];
       if (x < -1.3 || x > 1.45 || std::abs(y) > 1.0) continue;  // unknown
-      if (x < -1.25 || x > 1.4 || std::abs(y) > 0.95 || (x > 0.5 && x < 0.55 && (door_drawn_shut || std::abs(y) > 0.3)))
+      const bool wall_between = x > 0.5 && x < 0.55 && (door_drawn_shut || std::abs(y) > 0.3);
+      if (x < -1.25 || x > 1.4 || std::abs(y) > 0.95 || wall_between)
         cell = 100;
       else if (!(west_unknown && x < -0.7) && !(east_unknown && x > 0.8))
         cell = 0;
