@@ -57,7 +57,8 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
   if (!manhattan_axes_) {
     manhattan_reference_.Add(direction);
     if (++manhattan_count_ < config_.exp_manhattan_reference_frames) return;
-    if (manhattan_reference_.Agreement() >= kMinAgreement * manhattan_count_) manhattan_axes_ = manhattan_reference_.Mean();
+    if (manhattan_reference_.Agreement() >= kMinAgreement * manhattan_count_)
+      manhattan_axes_ = manhattan_reference_.Mean();
     manhattan_reference_ = {};
     manhattan_count_ = 0;
     return;

@@ -137,7 +137,8 @@ struct ExperienceMapConfig {
       "... up to this; the least-squares correction's gate for the experiences' walls (rad)");
     v("exp_manhattan_gain", exp_manhattan_gain, "share of a wall direction's offset from its axis taken out per frame");
     v("exp_manhattan_recapture_frames", exp_manhattan_recapture_frames,
-      "wall directions past the gate that, agreeing, are taken for the heading's drift and taken out at once (0 = off)");
+      "wall directions past the gate that, agreeing, are taken for the heading's drift and taken out "
+      "at once (0 = off)");
     v("exp_manhattan_recapture_spread_rad", exp_manhattan_recapture_spread_rad,
       "how far those may lie from their mean (rad)");
     v("exp_manhattan_recapture_turn_rad", exp_manhattan_recapture_turn_rad,

@@ -141,8 +141,8 @@ std::optional<Plan> ExplorationPlanner::WayBack(const GridView& occupancy, const
     plan.way_back = true;
     plan.has_target = true;
     plan.target = at;
-    plan.reason = "no unknown space is reachable from here, but some is from where the robot was " +
-                  std::to_string(trail_.size() - k) + " moves ago: driving back along its trail";
+    plan.reason = "no unknown space is reachable from here, but some is from where the robot stood " +
+                  std::to_string(trail_.size() - k) + " poses back along its trail: driving back";
     return plan;
   }
   return std::nullopt;

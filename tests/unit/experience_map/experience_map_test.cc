@@ -807,7 +807,8 @@ TEST(ExperienceMap, HeadingThatDriftedPastTheGateIsTakenBackWhenTheWallsAgreeOnI
   }
   EXPECT_EQ(still->heading_recaptures(), 0u);
 
-  ExpectKeysRefused(config, {{"exp_manhattan_recapture_frames", [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_frames = -1; }},
+  ExpectKeysRefused(config, {{"exp_manhattan_recapture_frames",
+                              [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_frames = -1; }},
                              {"exp_manhattan_recapture_spread_rad",
                               [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_spread_rad = 0; }},
                              {"exp_manhattan_recapture_turn_rad",
