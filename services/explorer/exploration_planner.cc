@@ -196,12 +196,33 @@ void ExplorationPlanner::ReportBlocked(const Plan& plan, std::optional<std::pair
                          std::hypot(obstacle->first - plan.target.x, obstacle->second - plan.target.y) <= kNearGoalM;
   const int weight = near_goal ? kThirds : 1, limit = kThirds * strikes;
   const int k = finishing_ ? FinerPerCoarse() : 1;
+  bool set_aside = false;
   ForEachFinerCell(plan.goal_x / k, plan.goal_y / k, k, [&](int x, int y) {
     int& count = blocked_attempts_[{x, y}];
     const bool reaches_limit = (count + weight) / limit > count / limit;
     count += weight;
     if (reaches_limit) SetAside(x, y, reason, !plan.margin_goal);
+    set_aside = set_aside || reaches_limit;
   });
+  if (set_aside && !plan.margin_goal) SetAsideAround(plan.goal_x, plan.goal_y);
+}
+
+void ExplorationPlanner::SetAsideAround(int gx, int gy) {
+  const CoarseGrid& cs = last_grid_;
+  if (config_.set_aside_radius_m <= 0 || !cs.Contains(gx, gy)) return;
+  const int count = blocked_attempts_[{gx, gy}];
+  const int reach = static_cast<int>(config_.set_aside_radius_m / cs.cell_size_m);
+  const std::string reason = "next to goal cell (" + std::to_string(gx) + ", " + std::to_string(gy) +
+                             "), set aside after refused moves (set_aside_radius_m)";
+  for (int y = gy - reach; y <= gy + reach; ++y)
+    for (int x = gx - reach; x <= gx + reach; ++x) {
+      if (!cs.Contains(x, y) || std::hypot(x - gx, y - gy) * cs.cell_size_m > config_.set_aside_radius_m) continue;
+      const CellClass c = cs.At(x, y);
+      if ((c != CellClass::kUnknown && c != CellClass::kUncertain) || IsSetAside(x, y)) continue;
+      int& attempts = blocked_attempts_[{x, y}];
+      attempts = std::max(attempts, count);  // tried again with the goal, set aside again with it
+      SetAside(x, y, reason, true);
+    }
 }
 
 void ExplorationPlanner::ReportBump(const Plan& plan, const Pose2D& at, bool backwards) {
@@ -354,6 +375,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   grid_config.coarse_cell_factor = cell_factor();
   if (finishing_) grid_config.min_unknown_cells_for_goal = config_.finishing_min_unknown_cells;
   const CoarseGrid cs = BuildConfigurationSpace(occupancy, grid_config);
+  last_grid_ = cs;
   const int rx = cs.CellX(robot.x), ry = cs.CellY(robot.y);
   if (!cs.Contains(rx, ry)) throw std::invalid_argument("robot is outside the map");
   if (std::optional<Plan> out = StepOutOfRadius(occupancy, robot)) return *out;

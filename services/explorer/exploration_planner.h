@@ -106,7 +106,7 @@ class ExplorationPlanner {
   void RecordMove(const Pose2D& from, const Pose2D& to);
   // A move of this plan was blocked when looked at; after max_blocked_attempts such refusals
   // within 1.5 m of where the plan ends (or without `obstacle`), three times as many farther off,
-  // its goal is set aside. obstacle (world x, y; from ObstacleOnPath): until the next pirouette,
+  // its goal is set aside, and the unseen cells within set_aside_radius_m of it with it. obstacle (world x, y; from ObstacleOnPath): until the next pirouette,
   // plans keep their centre line farther than the robot radius from it. Without that the coarse
   // plan (its cells are classed by the grid cells inside them) can send every goal through the
   // same gap the exact check refuses, and each goal is set aside in turn until exploration calls
@@ -134,6 +134,9 @@ class ExplorationPlanner {
 
  private:
   void SetAside(int x, int y, std::string reason, bool blocked = false);
+  // Sets aside (as blocked, with the goal's count of refusals) the unknown and uncertain cells of
+  // the last grid planned on within set_aside_radius_m of goal cell (gx, gy).
+  void SetAsideAround(int gx, int gy);
   // Goes on to the finer grid: set-aside and blocked goal cells become the cells covering them.
   void StartFinishing();
   // Finer cells per coarse cell a side.
@@ -173,6 +176,7 @@ class ExplorationPlanner {
   bool finishing_ = false;
   std::vector<Pose2D> trail_;  // RecordMove, oldest first
   int way_backs_ = 0;          // driven so far
+  CoarseGrid last_grid_;       // the last PlanFrom's (SetAsideAround)
 };
 
 }  // namespace rslam::explorer

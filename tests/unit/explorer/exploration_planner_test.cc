@@ -442,6 +442,69 @@ TEST(ExplorationPlannerTest, RefusalsFarFromTheGoalCountAThirdAgainstIt) {
   EXPECT_EQ(near.set_aside_goals().size(), 1u);
 }
 
+TEST(ExplorationPlannerTest, AGoalSetAsideAfterRefusalsTakesTheUnseenCellsAroundItAlong) {
+  // A patch of unknown space 0.4 m a side (4 x 4 exploration cells) 2 m from the robot, and one
+  // unknown cell far from it. Refusals next to the patch's nearest cell set it aside with the
+  // patch's cells within set_aside_radius_m; they come back together on the retry.
+  TestGrid grid(60, 30, 0);
+  for (int y = 10; y < 18; ++y)
+    for (int x = 40; x < 48; ++x) grid.Set(x, y, -1);
+  grid.Set(55, 25, -1);
+  ExplorerConfig config = Config();
+  config.max_blocked_attempts = 2;
+  config.set_aside_radius_m = 0.25;
+  const Pose2D robot{0.25, 0.75, 0.0};
+  const auto set_aside_after_refusals = [&](ExplorationPlanner& planner) {
+    const Plan plan = planner.PlanFrom(grid.View(), robot);
+    EXPECT_FALSE(plan.complete) << plan.reason;
+    EXPECT_EQ(plan.goal_x, 20) << plan.reason;  // the patch's nearest column
+    for (int i = 0; i < 2; ++i) planner.ReportBlocked(plan, std::pair{plan.target.x + 0.05, plan.target.y});
+    return plan;
+  };
+  ExplorationPlanner planner(config);
+  const Plan first = set_aside_after_refusals(planner);
+  const auto& aside = planner.set_aside_goals();
+  ASSERT_GT(aside.size(), 4u);
+  for (const SetAsideGoal& g : aside) {
+    EXPECT_LE(std::hypot(g.x - first.goal_x, g.y - first.goal_y) * 0.1, 0.25 + 1e-9) << g.x << ", " << g.y;
+    EXPECT_TRUE(g.blocked);
+  }
+  EXPECT_LT(aside.size(), 16u);  // not the whole patch, nor the far cell
+  const Plan next = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(next.complete) << next.reason;
+  EXPECT_GT(std::hypot(next.goal_x - first.goal_x, next.goal_y - first.goal_y) * 0.1, 0.25) << next.reason;
+
+  // Refused every time, all unknown space is set aside; after a look all round every cell is
+  // tried again (the cells taken along count as their goal did), then set aside for good.
+  const auto refuse_until_stuck = [&]() {
+    for (int i = 0; i < 100; ++i) {
+      const Plan plan = planner.PlanFrom(grid.View(), robot);
+      if (plan.complete || plan.commands[0].kind == Kind::kPirouette) return plan;
+      for (int j = 0; j < 2; ++j) planner.ReportBlocked(plan, std::pair{plan.target.x + 0.05, plan.target.y});
+    }
+    ADD_FAILURE() << "still planning after 100 plans";
+    return Plan{};
+  };
+  const Plan look = refuse_until_stuck();
+  ASSERT_FALSE(look.complete) << look.reason;
+  const size_t all_aside = planner.set_aside_goals().size();
+  EXPECT_GE(all_aside, 17u);  // the patch's 16 cells and the far one
+  planner.RecordPirouette(robot);
+  const Plan retried = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(retried.complete) << retried.reason;
+  EXPECT_TRUE(planner.set_aside_goals().empty());
+  planner.ReportBlocked(retried, std::pair{retried.target.x + 0.05, retried.target.y});
+  const Plan end = refuse_until_stuck();
+  EXPECT_TRUE(end.complete) << end.reason;
+  EXPECT_EQ(planner.set_aside_goals().size(), all_aside);
+
+  // With radius 0, the goal alone.
+  config.set_aside_radius_m = 0.0;
+  ExplorationPlanner alone(config);
+  set_aside_after_refusals(alone);
+  EXPECT_EQ(alone.set_aside_goals().size(), 1u);
+}
+
 TEST(ExplorationPlannerTest, GoalsStillUnknownAfterALookAreNotTriedAgain) {
   TestGrid grid(20, 20, 0);
   grid.Set(10, 10, -1);
