@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -324,19 +325,27 @@ class ExplorerNode::Controller {
     PublishStatusIfChanged();
   }
 
-  // Logs every goal the planner has newly set aside, with its reason, and every goal it tries again.
+  // Logs the goals the planner has newly set aside, with their reason (a run of cells with the same
+  // reason on one line), and the goals it tries again.
   void NoteSetAside() {
     const auto& goals = planner_.set_aside_goals();
     const auto listed = [](const std::vector<SetAsideGoal>& list, const SetAsideGoal& g) {
       return std::any_of(list.begin(), list.end(), [&](const SetAsideGoal& o) { return o.x == g.x && o.y == g.y; });
     };
-    for (const SetAsideGoal& g : logged_set_aside_) {
-      if (!listed(goals, g)) spdlog::info("trying goal cell ({}, {}) again", g.x, g.y);
-    }
-    for (const SetAsideGoal& g : goals) {
-      if (listed(logged_set_aside_, g)) continue;
-      spdlog::warn("set aside goal cell ({}, {}): {}", g.x, g.y, g.reason);
-      reason_ = "set aside goal cell (" + std::to_string(g.x) + ", " + std::to_string(g.y) + "): " + g.reason;
+    const auto and_more = [](size_t n) { return n > 1 ? " and " + std::to_string(n - 1) + " more" : std::string(); };
+    std::vector<SetAsideGoal> retried, fresh;
+    std::copy_if(logged_set_aside_.begin(), logged_set_aside_.end(), std::back_inserter(retried),
+                 [&](const SetAsideGoal& g) { return !listed(goals, g); });
+    std::copy_if(goals.begin(), goals.end(), std::back_inserter(fresh),
+                 [&](const SetAsideGoal& g) { return !listed(logged_set_aside_, g); });
+    if (!retried.empty())
+      spdlog::info("trying again goal cell ({}, {}){}", retried[0].x, retried[0].y, and_more(retried.size()));
+    for (size_t i = 0, j = 0; i < fresh.size(); i = j) {
+      while (j < fresh.size() && fresh[j].reason == fresh[i].reason) ++j;
+      const std::string cells =
+          "goal cell (" + std::to_string(fresh[i].x) + ", " + std::to_string(fresh[i].y) + ")" + and_more(j - i);
+      spdlog::warn("set aside {}: {}", cells, fresh[i].reason);
+      reason_ = "set aside " + cells + ": " + fresh[i].reason;
       dirty_ = true;
     }
     logged_set_aside_ = goals;
