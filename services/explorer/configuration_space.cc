@@ -5,6 +5,24 @@
 
 namespace rslam::explorer {
 
+namespace {
+
+// True when no occupied cell's centre (or cell past the map's edge) lies within radius_m of (x, y).
+bool ClearOfObstacles(const cv::Mat& occupied, const GridView& occupancy, double x, double y, double radius_m) {
+  const double cx = (x - occupancy.origin_x_m) / occupancy.resolution_m - 0.5;
+  const double cy = (y - occupancy.origin_y_m) / occupancy.resolution_m - 0.5;
+  const double r = radius_m / occupancy.resolution_m;
+  for (int gy = static_cast<int>(std::floor(cy - r)); gy <= static_cast<int>(std::ceil(cy + r)); ++gy)
+    for (int gx = static_cast<int>(std::floor(cx - r)); gx <= static_cast<int>(std::ceil(cx + r)); ++gx) {
+      if (std::hypot(gx - cx, gy - cy) > r) continue;
+      if (gx < 0 || gy < 0 || gx >= occupancy.width || gy >= occupancy.height || occupied.at<uchar>(gy, gx))
+        return false;
+    }
+  return true;
+}
+
+}  // namespace
+
 CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConfig& config) {
   occupancy.Validate();
   const int w = occupancy.width, h = occupancy.height;
@@ -65,7 +83,9 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
       else if (unseen + uncertain >= config.min_unknown_cells_for_goal) cell = CellClass::kUncertain;
       grid.unseen[static_cast<size_t>(cy) * grid.width + cx] = unseen + uncertain > 0;
       grid.margin_goal[static_cast<size_t>(cy) * grid.width + cx] =
-          occ > 0 && raw == 0 && goal_cells >= config.min_unknown_cells_for_goal;
+          occ > 0 && raw == 0 && goal_cells >= config.min_unknown_cells_for_goal &&
+          ClearOfObstacles(raw_occupied, occupancy, grid.CentreX(cx), grid.CentreY(cy),
+                           config.robot_radius_m + config.margin_goal_spare_m);
     }
   }
   return grid;

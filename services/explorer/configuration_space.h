@@ -29,7 +29,8 @@ struct CoarseGrid {
   // 1 where the block holds an unknown or uncertain occupancy cell (whatever its class).
   std::vector<uint8_t> unseen;
   // 1 where a block of the margin (occupied by dilation, no obstacle of its own) holds what would
-  // make it a goal.
+  // make it a goal and its centre is clear of obstacles by the robot radius plus
+  // margin_goal_spare_m.
   std::vector<uint8_t> margin_goal;
 
   CellClass At(int x, int y) const { return cells[static_cast<size_t>(y) * width + x]; }

@@ -63,6 +63,39 @@ TEST(ConfigurationSpaceTest, UncertainCellsMakeNoGoalWhenToldNotTo) {
   EXPECT_EQ(BuildConfigurationSpace(view, config).At(0, 0), CellClass::kUnknown);
 }
 
+TEST(ConfigurationSpaceTest, MarginGoalsOnlyWhereTheRobotFitsAtTheirCentre) {
+  // 3 m x 2 m of 5 cm cells, free left of a wall at x = 30, unknown right of it. The wall has a
+  // hole 10 cm wide (y 8..9) and a door 80 cm wide (y 20..35), both unseen.
+  std::vector<int8_t> cells(60 * 40, 0);
+  for (int y = 0; y < 40; ++y)
+    for (int x = 30; x < 60; ++x) {
+      const bool opening = (y >= 8 && y <= 9) || (y >= 20 && y <= 35);
+      cells[y * 60 + x] = x == 30 && !opening ? 100 : -1;
+    }
+  GridView view{60, 40, 0.05, 0.0, 0.0, cells};
+  ExplorerConfig config;
+  config.robot_radius_m = 0.2;
+  config.coarse_cell_factor = 4;  // 20 cm cells; x 7 holds the wall, x 8 lies past it
+  const CoarseGrid cs = BuildConfigurationSpace(view, config);
+  const auto margin_goal = [&](int x, int y) { return cs.margin_goal[static_cast<size_t>(y) * cs.width + x] != 0; };
+  // In the door, 0.33 m from both of its sides: the robot's disc fits with 5 cm to spare.
+  EXPECT_TRUE(margin_goal(7, 6));
+  EXPECT_TRUE(margin_goal(7, 7));
+  // At the door's sides (0.13 m from the wall's end), and past the hole: margin holding unseen
+  // cells and no obstacle, but the robot does not fit there.
+  EXPECT_FALSE(margin_goal(7, 5));
+  EXPECT_FALSE(margin_goal(7, 8));
+  EXPECT_EQ(cs.At(8, 2), CellClass::kOccupied);
+  EXPECT_FALSE(cs.obstacle[2 * cs.width + 8]);
+  EXPECT_TRUE(cs.unseen[2 * cs.width + 8]);
+  EXPECT_FALSE(margin_goal(8, 2));
+  // With no room to spare, the door's middle is still a goal; with 15 cm it is not.
+  config.margin_goal_spare_m = 0.0;
+  EXPECT_TRUE(BuildConfigurationSpace(view, config).margin_goal[6 * cs.width + 7]);
+  config.margin_goal_spare_m = 0.15;
+  EXPECT_FALSE(BuildConfigurationSpace(view, config).margin_goal[6 * cs.width + 7]);
+}
+
 TEST(ConfigurationSpaceTest, RejectsAnInconsistentView) {
   std::vector<int8_t> cells(10, 0);
   EXPECT_THROW(BuildConfigurationSpace(GridView{4, 4, 0.1, 0, 0, cells}, ExplorerConfig{}), std::invalid_argument);
