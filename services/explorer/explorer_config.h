@@ -29,14 +29,14 @@ struct ExplorerConfig {
   // unknown space but no obstacle of their own: the unknown past a gap narrower than the robot
   // plus both margins lies in the margin itself, so no goal was left past it (a demo run ended
   // with the space past a 0.6 m door unseen). One refused move on the narrow way to such a goal
-  // sets it aside. Off by default: in six demo runs it raised coverage to 0.945-0.962 (0.95 or
-  // more in five), but a wall drawn with holes offers 20-40 such cells, each a trip and a look,
-  // and four of the six runs reached the demo's 280-s limit (tools/demo/MEASUREMENTS.md).
+  // sets it aside. Every cell so was a trip and a look, and a wall drawn with holes offers 20-40
+  // of them: four of six demo runs reached the 280-s limit (session 32). Hence, and since a hole
+  // in a drawn wall takes a look from next door but no way through, only cells whose centre lies
+  // margin_goal_spare_m farther than the robot radius from every obstacle count: where the robot's
+  // disc fits, as in a door or a passage's mouth (on 18 demo runs' last grids 4-16 reachable
+  // cells against 30-58, the mouth of the passage south of the room among them in the three that
+  // never entered it). On in the demo (tools/demo/MEASUREMENTS.md, session 38).
   bool margin_goals = false;
-  // ... but only cells whose centre lies this much farther than the robot radius from every
-  // obstacle: where the robot's disc fits, the gap of a door or a passage's mouth, not a hole in a
-  // drawn wall (on 26 demo runs' last grids 3-16 reachable cells against 30-58; the mouth of the
-  // passage south of the room among them in the three that never entered it).
   double margin_goal_spare_m = 0.05;
   // ... and if nothing is reachable even so, uncertain cells that join unknown space through
   // uncertain cells are goals: a frontier made wholly of cells seen too seldom to class (the far
