@@ -106,8 +106,9 @@ class ExplorationPlanner {
   void RecordMove(const Pose2D& from, const Pose2D& to);
   // A move of this plan was blocked when looked at; after max_blocked_attempts such refusals
   // within 1.5 m of where the plan ends (or without `obstacle`), three times as many farther off,
-  // its goal is set aside, and the unseen cells within set_aside_radius_m of it with it. obstacle (world x, y; from ObstacleOnPath): until the next pirouette,
-  // plans keep their centre line farther than the robot radius from it. Without that the coarse
+  // its goal is set aside, and the unseen cells within set_aside_radius_m of it with it.
+  // obstacle (world x, y; from ObstacleOnPath): until the next pirouette, plans keep their centre
+  // line farther than the robot radius from it. Without that the coarse
   // plan (its cells are classed by the grid cells inside them) can send every goal through the
   // same gap the exact check refuses, and each goal is set aside in turn until exploration calls
   // itself complete.

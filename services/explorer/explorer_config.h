@@ -21,7 +21,7 @@ struct ExplorerConfig {
   int max_blocked_attempts = 3;       // refused moves near a goal before it is set aside (far ones: 3x)
   int blocked_goal_retries = 1;       // times such a goal is tried again before exploration ends
   // A goal set aside after refused moves takes the unseen cells within this of it along (they
-  // come back with it on a retry): the way to each is the same (a round table's inside took three
+  // come back with it on a retry): the way to each is the same (a round table's inside took four
   // of 22 demo runs 80-140 s of refusals, goal cell after goal cell). 0 = the goal alone.
   double set_aside_radius_m = 0.5;
   bool squeeze_through_margin = true; // before calling exploration complete, plan through the margin
