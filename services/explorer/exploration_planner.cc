@@ -388,12 +388,26 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     traversable[i] = cs.cells[i] == CellClass::kFree;
     goal[i] = cs.cells[i] == CellClass::kUnknown;
   }
+  // Cells never aimed at within set_aside_radius_m of a goal set aside after refusals are no
+  // goals either: the grid keeps showing new unseen cells in a place the robot cannot get into (a
+  // demo run reached its time limit on the inside of a round table, whose unseen cells came and
+  // went as it looked at it from around, each new one refused three times over).
+  std::vector<uint8_t> near_refused(n, 0);
+  const int reach = static_cast<int>(config_.set_aside_radius_m / cs.cell_size_m);
   for (const SetAsideGoal& g : set_aside_) {
     if (!cs.Contains(g.x, g.y)) continue;
     const size_t i = static_cast<size_t>(g.y) * w + g.x;
     traversable[i] = 0;
     goal[i] = 0;
+    if (!g.blocked || config_.set_aside_radius_m <= 0) continue;
+    for (int y = g.y - reach; y <= g.y + reach; ++y)
+      for (int x = g.x - reach; x <= g.x + reach; ++x)
+        if (cs.Contains(x, y) && std::hypot(x - g.x, y - g.y) * cs.cell_size_m <= config_.set_aside_radius_m &&
+            !blocked_attempts_.contains({x, y}))
+          near_refused[static_cast<size_t>(y) * w + x] = 1;
   }
+  for (size_t i = 0; i < n; ++i)
+    if (near_refused[i]) goal[i] = 0;
   // Cells within the robot radius of an obstacle reported since the last pirouette (or found on
   // a move of a plan made below, for this call only: the grid shows it to every later call):
   // neither the descent nor the escape goes through them.
@@ -510,7 +524,8 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       if (config_.margin_goals && squeezing && !margin_goals_added) {
         margin_goals_added = true;
         for (size_t i = 0; i < n; ++i)
-          if (cs.margin_goal[i] && !IsSetAside(static_cast<int>(i % w), static_cast<int>(i / w))) goal[i] = 1;
+          if (cs.margin_goal[i] && !near_refused[i] && !IsSetAside(static_cast<int>(i % w), static_cast<int>(i / w)))
+            goal[i] = 1;
         continue;
       }
       // Still nothing: unseen space may lie behind cells seen too seldom to be called free or
