@@ -21,8 +21,9 @@ struct ExplorerConfig {
   int max_blocked_attempts = 3;       // refused moves near a goal before it is set aside (far ones: 3x)
   int blocked_goal_retries = 1;       // times such a goal is tried again before exploration ends
   // A goal set aside after refused moves takes the unseen cells within this of it along (they
-  // come back with it on a retry): the way to each is the same (a round table's inside took four
-  // of 22 demo runs 80-140 s of refusals, goal cell after goal cell). 0 = the goal alone.
+  // come back with it on a retry), and cells never aimed at within this of those are no goals:
+  // the way to each is the same (a round table's inside took four of 22 demo runs 80-140 s of
+  // refusals, goal cell after goal cell, and one more to the time limit). 0 = the goal alone.
   double set_aside_radius_m = 0.5;
   bool squeeze_through_margin = true; // before calling exploration complete, plan through the margin
   // ... and if even that reaches no unknown space, take for goals the margin's cells that hold
