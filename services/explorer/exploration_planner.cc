@@ -84,6 +84,15 @@ void ForEachFinerCell(int x, int y, int k, F f) {
     for (int dx = 0; dx < k; ++dx) f(x * k + dx, y * k + dy);
 }
 
+// Calls f(x, y) for each cell of cs whose centre lies within radius_m of cell (cx, cy)'s.
+template <class F>
+void ForEachCellWithin(const CoarseGrid& cs, int cx, int cy, double radius_m, F f) {
+  const int reach = static_cast<int>(radius_m / cs.cell_size_m);
+  for (int y = cy - reach; y <= cy + reach; ++y)
+    for (int x = cx - reach; x <= cx + reach; ++x)
+      if (cs.Contains(x, y) && std::hypot(x - cx, y - cy) * cs.cell_size_m <= radius_m) f(x, y);
+}
+
 }  // namespace
 
 ExplorationPlanner::ExplorationPlanner(ExplorerConfig config) : config_(std::move(config)) {
@@ -211,18 +220,15 @@ void ExplorationPlanner::SetAsideAround(int gx, int gy) {
   const CoarseGrid& cs = last_grid_;
   if (config_.set_aside_radius_m <= 0 || !cs.Contains(gx, gy)) return;
   const int count = blocked_attempts_[{gx, gy}];
-  const int reach = static_cast<int>(config_.set_aside_radius_m / cs.cell_size_m);
   const std::string reason = "next to goal cell (" + std::to_string(gx) + ", " + std::to_string(gy) +
                              "), set aside after refused moves (set_aside_radius_m)";
-  for (int y = gy - reach; y <= gy + reach; ++y)
-    for (int x = gx - reach; x <= gx + reach; ++x) {
-      if (!cs.Contains(x, y) || std::hypot(x - gx, y - gy) * cs.cell_size_m > config_.set_aside_radius_m) continue;
-      const CellClass c = cs.At(x, y);
-      if ((c != CellClass::kUnknown && c != CellClass::kUncertain) || IsSetAside(x, y)) continue;
-      int& attempts = blocked_attempts_[{x, y}];
-      attempts = std::max(attempts, count);  // tried again with the goal, set aside again with it
-      SetAside(x, y, reason, true);
-    }
+  ForEachCellWithin(cs, gx, gy, config_.set_aside_radius_m, [&](int x, int y) {
+    const CellClass c = cs.At(x, y);
+    if ((c != CellClass::kUnknown && c != CellClass::kUncertain) || IsSetAside(x, y)) return;
+    int& attempts = blocked_attempts_[{x, y}];
+    attempts = std::max(attempts, count);  // tried again with the goal, set aside again with it
+    SetAside(x, y, reason, true);
+  });
 }
 
 void ExplorationPlanner::ReportBump(const Plan& plan, const Pose2D& at, bool backwards) {
@@ -393,18 +399,15 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   // demo run reached its time limit on the inside of a round table, whose unseen cells came and
   // went as it looked at it from around, each new one refused three times over).
   std::vector<uint8_t> near_refused(n, 0);
-  const int reach = static_cast<int>(config_.set_aside_radius_m / cs.cell_size_m);
   for (const SetAsideGoal& g : set_aside_) {
     if (!cs.Contains(g.x, g.y)) continue;
     const size_t i = static_cast<size_t>(g.y) * w + g.x;
     traversable[i] = 0;
     goal[i] = 0;
     if (!g.blocked || config_.set_aside_radius_m <= 0) continue;
-    for (int y = g.y - reach; y <= g.y + reach; ++y)
-      for (int x = g.x - reach; x <= g.x + reach; ++x)
-        if (cs.Contains(x, y) && std::hypot(x - g.x, y - g.y) * cs.cell_size_m <= config_.set_aside_radius_m &&
-            !blocked_attempts_.contains({x, y}))
-          near_refused[static_cast<size_t>(y) * w + x] = 1;
+    ForEachCellWithin(cs, g.x, g.y, config_.set_aside_radius_m, [&](int x, int y) {
+      if (!blocked_attempts_.contains({x, y})) near_refused[static_cast<size_t>(y) * w + x] = 1;
+    });
   }
   for (size_t i = 0; i < n; ++i)
     if (near_refused[i]) goal[i] = 0;
