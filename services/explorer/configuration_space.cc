@@ -1,27 +1,32 @@
 #include "services/explorer/configuration_space.h"
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
 namespace rslam::explorer {
 
-namespace {
-
-// True when no occupied cell's centre (or cell past the map's edge) lies within radius_m of (x, y).
-bool ClearOfObstacles(const cv::Mat& occupied, const GridView& occupancy, double x, double y, double radius_m) {
-  const double cx = (x - occupancy.origin_x_m) / occupancy.resolution_m - 0.5;
-  const double cy = (y - occupancy.origin_y_m) / occupancy.resolution_m - 0.5;
-  const double r = radius_m / occupancy.resolution_m;
-  for (int gy = static_cast<int>(std::floor(cy - r)); gy <= static_cast<int>(std::ceil(cy + r)); ++gy)
-    for (int gx = static_cast<int>(std::floor(cx - r)); gx <= static_cast<int>(std::ceil(cx + r)); ++gx) {
-      if (std::hypot(gx - cx, gy - cy) > r) continue;
-      if (gx < 0 || gy < 0 || gx >= occupancy.width || gy >= occupancy.height || occupied.at<uchar>(gy, gx))
-        return false;
+double Clearance(const GridView& occupancy, double x, double y, double radius_m, double* away_x, double* away_y) {
+  const double r = radius_m, res = occupancy.resolution_m;
+  const int cx0 = static_cast<int>(std::floor((x - r - occupancy.origin_x_m) / res));
+  const int cy0 = static_cast<int>(std::floor((y - r - occupancy.origin_y_m) / res));
+  const int span = static_cast<int>(std::ceil(2 * r / res)) + 1;
+  double nearest = r;
+  for (int cy = cy0; cy <= cy0 + span; ++cy)
+    for (int cx = cx0; cx <= cx0 + span; ++cx) {
+      if (!occupancy.Blocks(cx, cy)) continue;
+      const double dx = x - (occupancy.origin_x_m + (cx + 0.5) * res);
+      const double dy = y - (occupancy.origin_y_m + (cy + 0.5) * res);
+      const double d = std::hypot(dx, dy);
+      if (d >= r) continue;
+      nearest = std::min(nearest, d);
+      if (away_x && away_y && d > 1e-9) {
+        *away_x += (r - d) * dx / d;
+        *away_y += (r - d) * dy / d;
+      }
     }
-  return true;
+  return nearest;
 }
-
-}  // namespace
 
 CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConfig& config) {
   occupancy.Validate();
@@ -48,6 +53,7 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
     cv::dilate(occupied, occupied, disc);
   }
   const int f = config.coarse_cell_factor;
+  const double spare_radius = config.robot_radius_m + config.margin_goal_spare_m;  // margin goals'
   CoarseGrid grid;
   grid.width = (w + f - 1) / f;
   grid.height = (h + f - 1) / f;
@@ -84,8 +90,7 @@ CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConf
       grid.unseen[static_cast<size_t>(cy) * grid.width + cx] = unseen + uncertain > 0;
       grid.margin_goal[static_cast<size_t>(cy) * grid.width + cx] =
           occ > 0 && raw == 0 && goal_cells >= config.min_unknown_cells_for_goal &&
-          ClearOfObstacles(raw_occupied, occupancy, grid.CentreX(cx), grid.CentreY(cy),
-                           config.robot_radius_m + config.margin_goal_spare_m);
+          Clearance(occupancy, grid.CentreX(cx), grid.CentreY(cy), spare_radius) >= spare_radius;
     }
   }
   return grid;

@@ -41,6 +41,12 @@ struct CoarseGrid {
   int CellY(double y_m) const { return static_cast<int>(std::floor((y_m - origin_y_m) / cell_size_m)); }
 };
 
+// Distance from (x, y) to the nearest centre of a cell that GridView::Blocks, at most radius_m.
+// With away_x and away_y, adds to them for each such cell closer than radius_m the unit vector
+// from it to (x, y), weighted by how far inside the radius it lies.
+double Clearance(const GridView& occupancy, double x, double y, double radius_m, double* away_x = nullptr,
+                 double* away_y = nullptr);
+
 // Throws std::invalid_argument for an invalid view.
 CoarseGrid BuildConfigurationSpace(const GridView& occupancy, const ExplorerConfig& config);
 

@@ -20,12 +20,6 @@ double DistanceToSegment(double px, double py, double x0, double y0, double sx, 
   return std::hypot(px - (x0 + t * sx), py - (y0 + t * sy));
 }
 
-// An occupied cell, or one past the map's edge: what a move must keep the robot radius from.
-bool Blocks(const GridView& occupancy, int cx, int cy) {
-  return cx < 0 || cy < 0 || cx >= occupancy.width || cy >= occupancy.height ||
-         occupancy.ClassAt(cx, cy) == CellClass::kOccupied;
-}
-
 // Plans made again within one PlanFrom because one of their own moves passed an obstacle.
 constexpr int kMaxReplansForBlockedMoves = 20;
 
@@ -247,30 +241,8 @@ bool ExplorationPlanner::PassesBlockingObstacle(const Pose2D& from, double dista
 
 std::optional<Plan> ExplorationPlanner::StepOutOfRadius(const GridView& occupancy, const Pose2D& robot) const {
   const double r = config_.robot_radius_m, res = occupancy.resolution_m;
-  // Distance from (x, y) to the nearest obstacle cell centre (or cell past the map's edge), at
-  // most r; `away` sums the unit vectors from each closer cell, weighted by how far inside.
-  const auto clearance = [&](double x, double y, double* away_x = nullptr, double* away_y = nullptr) {
-    const int cx0 = static_cast<int>(std::floor((x - r - occupancy.origin_x_m) / res));
-    const int cy0 = static_cast<int>(std::floor((y - r - occupancy.origin_y_m) / res));
-    const int span = static_cast<int>(std::ceil(2 * r / res)) + 1;
-    double nearest = r;
-    for (int cy = cy0; cy <= cy0 + span; ++cy)
-      for (int cx = cx0; cx <= cx0 + span; ++cx) {
-        if (!Blocks(occupancy, cx, cy)) continue;
-        const double dx = x - (occupancy.origin_x_m + (cx + 0.5) * res);
-        const double dy = y - (occupancy.origin_y_m + (cy + 0.5) * res);
-        const double d = std::hypot(dx, dy);
-        if (d >= r) continue;
-        nearest = std::min(nearest, d);
-        if (away_x && d > 1e-9) {
-          *away_x += (r - d) * dx / d;
-          *away_y += (r - d) * dy / d;
-        }
-      }
-    return nearest;
-  };
   double away_x = 0.0, away_y = 0.0;
-  const double inside = clearance(robot.x, robot.y, &away_x, &away_y);
+  const double inside = Clearance(occupancy, robot.x, robot.y, r, &away_x, &away_y);
   if (inside >= r - 1e-9 || std::hypot(away_x, away_y) < 1e-12) return std::nullopt;
   // Straight away from the obstacles, or up to 90 degrees either side of that, as far as the
   // radius needs: the step that leaves the most clearance and passes look before you move.
@@ -280,7 +252,7 @@ std::optional<Plan> ExplorationPlanner::StepOutOfRadius(const GridView& occupanc
   for (const double offset : {0.0, M_PI / 6, -M_PI / 6, M_PI / 3, -M_PI / 3, M_PI / 2, -M_PI / 2}) {
     const Pose2D step{robot.x, robot.y, away + offset};
     const Pose2D end = Compose(step, {distance, 0.0, 0.0});
-    const double c = clearance(end.x, end.y);
+    const double c = Clearance(occupancy, end.x, end.y, r);
     if (c > best_clearance + 1e-9 && IsPathClear(occupancy, step, distance) && !PassesBlockingObstacle(step, distance)) {
       best_clearance = c;
       best = end;
@@ -676,13 +648,13 @@ std::optional<std::pair<double, double>> ExplorationPlanner::ObstacleOnPath(cons
   double start_clearance = r;
   for (int cy = cy_min; cy <= cy_max; ++cy)
     for (int cx = cx_min; cx <= cx_max; ++cx)
-      if (Blocks(occupancy, cx, cy)) {
+      if (occupancy.Blocks(cx, cy)) {
         const auto [px, py] = centre(cx, cy);
         start_clearance = std::min(start_clearance, std::hypot(px - x0, py - y0));
       }
   for (int cy = cy_min; cy <= cy_max; ++cy) {
     for (int cx = cx_min; cx <= cx_max; ++cx) {
-      if (!Blocks(occupancy, cx, cy)) continue;
+      if (!occupancy.Blocks(cx, cy)) continue;
       const auto [px, py] = centre(cx, cy);
       const double d = DistanceToSegment(px, py, x0, y0, sx, sy);
       if (d <= r && d < start_clearance - 1e-9) return std::pair{px, py};

@@ -34,6 +34,10 @@ struct GridView {
     return CellClass::kUncertain;
   }
   CellClass ClassAt(int x, int y) const { return Classify(cells[static_cast<size_t>(y) * width + x]); }
+  // An occupied cell, or one past the map's edge: what the robot must keep its radius from.
+  bool Blocks(int x, int y) const {
+    return x < 0 || y < 0 || x >= width || y >= height || ClassAt(x, y) == CellClass::kOccupied;
+  }
 
   // Throws std::invalid_argument naming the problem.
   void Validate() const {
