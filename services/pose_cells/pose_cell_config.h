@@ -65,6 +65,11 @@ struct PoseCellConfig {
   bool exp_submap_offset = false;
   int exp_submap_min_age_frames = 150;
   int exp_submap_frames = 30;
+  // Not OpenRatSLAM's: a new link to such a place whose two visits' walls register but do not
+  // align as exp_boundary_check requires is refused (a new experience instead). A view and one
+  // frame's few metres of wall can agree on a place that thirty frames of wall show is another.
+  // Needs exp_submap_offset; a visit with too few boundary points is not checked.
+  bool exp_submap_check = false;
 
   template <class V>
   void VisitFields(V& v) {
@@ -108,6 +113,8 @@ struct PoseCellConfig {
       "exp_submap_offset applies to experiences made at least this many frames ago");
     v("exp_submap_frames", exp_submap_frames,
       "exp_submap_offset registers the boundaries of this many frames around each visit");
+    v("exp_submap_check", exp_submap_check,
+      "refuse a new link to an old experience when both visits' floor boundaries register but do not align");
   }
 
   void Validate() const {
@@ -137,6 +144,7 @@ struct PoseCellConfig {
     Require(exp_view_offset_max_gap_frames >= 0, "exp_view_offset_max_gap_frames", "must be non-negative");
     Require(exp_submap_min_age_frames >= 0, "exp_submap_min_age_frames", "must be non-negative");
     Require(exp_submap_frames >= 0, "exp_submap_frames", "must be non-negative");
+    Require(!exp_submap_check || exp_submap_offset, "exp_submap_check", "needs exp_submap_offset (the visits' walls)");
   }
 };
 

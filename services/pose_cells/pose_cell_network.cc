@@ -924,18 +924,23 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
       std::optional<BoundaryMatch> match;
       if (checked || (recognised && config_.exp_boundary_offset)) match = MatchBoundary(experiences_[matched], boundary);
       const bool aligns = match && BoundaryAligns(*match);
+      // The walls of both visits (exp_submap_offset), and whether they refuse a new link.
+      std::optional<BoundaryMatch> walls;
+      if (recognised && config_.exp_submap_offset &&
+          frames_processed_ - experiences_[matched].created_frame >=
+              static_cast<uint64_t>(config_.exp_submap_min_age_frames)) {
+        walls = MatchSubmaps(matched);
+      }
+      const bool walls_align = walls && BoundaryAligns(*walls);
+      const bool walls_refuse = config_.exp_submap_check && !linked && walls && !walls_align;
       if (!recognised) {
         create();
-      } else if (checked && !aligns) {
+      } else if ((checked && !aligns) || walls_refuse) {
         create();
         action.refused_link_to = matched;
       } else {
         std::optional<Eigen::Vector2d> measured = config_.exp_view_offset ? ViewOffset(matched) : std::nullopt;
-        if (config_.exp_submap_offset && frames_processed_ - experiences_[matched].created_frame >=
-                                             static_cast<uint64_t>(config_.exp_submap_min_age_frames)) {
-          const std::optional<BoundaryMatch> walls = MatchSubmaps(matched);
-          if (walls && BoundaryAligns(*walls)) measured = walls->pose.head<2>();
-        }
+        if (walls_align) measured = walls->pose.head<2>();
         if (measured) {
           action.offset_x_m = measured->x();
           action.offset_y_m = measured->y();

@@ -437,15 +437,42 @@ TEST(PoseCellNetwork, ViewOffsetSaysWhereThePlaceWasRecognisedFromTheBestViewAnd
   }
 }
 
-// exp_submap_offset: a room with a pillar on its south wall; the robot drives 4 m east, round a
-// 4 x 2 m loop, and along the first pass again 0.3 m to its north, each place recognised from the
-// frame that sees its view best. The view's offset puts the robot on the place; the walls of both
-// passes (30 frames around each) say it stands 0.3 m to its left. Places younger than
-// exp_submap_min_age_frames, or the key off, keep the view's offset.
+// A room with a pillar on its south wall: the robot drives 4 m east, round a 4 x 2 m loop, and
+// along the first pass again 0.3 m to its north, seeing templates 0..9 again. Each frame's floor
+// boundary is scanned from `first`'s walls on the first pass and from `then`'s after it (the
+// odometry reads the motion exactly: the network's odometry frame is the world's). Returns the
+// actions of the return pass.
+const std::vector<Wall> kPillarRoom = {{-1.5, -1.0, 5.5, -1.0}, {5.5, -1.0, 5.5, 3.0}, {5.5, 3.0, -1.5, 3.0},
+                                       {-1.5, 3.0, -1.5, -1.0}, {2.0, -1.0, 2.0, -0.6}, {2.0, -0.6, 2.4, -0.6},
+                                       {2.4, -0.6, 2.4, -1.0}};
+std::vector<Action> DrivePillarLoop(PoseCellNetwork& net, const std::vector<Wall>& first, const std::vector<Wall>& then) {
+  Pose2D truth;
+  uint32_t next = 0;
+  const std::vector<Wall>* walls = &first;
+  auto drive = [&](double d, double turn, uint32_t tid, bool is_new) {
+    truth = Compose(truth, {d, 0.0, turn});
+    const FloorBoundary seen = ScanOfWalls(*walls, truth.x, truth.y, truth.theta);
+    return net.ProcessFrame(d, turn, 1.0, {tid, is_new, 0.0}, &seen);
+  };
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(drive(0.4, 0.0, next++, true).kind, Action::Kind::kCreate);
+  walls = &then;
+  for (const auto& [step, n] : {std::pair{0.4, 5}, std::pair{0.4, 10}, std::pair{0.34, 5}}) {
+    drive(0.0, kPi / 2, next++, true);
+    for (int i = 0; i < n; ++i) drive(step, 0.0, next++, true);
+  }
+  drive(0.0, kPi / 2, next++, true);  // at (0, 0.3) facing east
+  std::vector<Action> back;
+  for (uint32_t k = 0; k < 10; ++k) back.push_back(drive(0.4, 0.0, k, false));
+  return back;
+}
+
+bool Recognises(const Action& a) { return a.kind == Action::Kind::kLink || a.kind == Action::Kind::kSet; }
+
+// exp_submap_offset: each place of the pillar loop is recognised from the frame that sees its view
+// best. The view's offset puts the robot on the place; the walls of both passes (30 frames around
+// each) say it stands 0.3 m to its left. Places younger than exp_submap_min_age_frames, or the key
+// off, keep the view's offset.
 TEST(PoseCellNetwork, SubmapOffsetTakesTheWallsOfBothVisitsOverTheView) {
-  const std::vector<Wall> room = {{-1.5, -1.0, 5.5, -1.0}, {5.5, -1.0, 5.5, 3.0}, {5.5, 3.0, -1.5, 3.0},
-                                  {-1.5, 3.0, -1.5, -1.0}, {2.0, -1.0, 2.0, -0.6}, {2.0, -0.6, 2.4, -0.6},
-                                  {2.4, -0.6, 2.4, -1.0}};
   struct Case {
     bool on;
     int min_age;
@@ -457,29 +484,58 @@ TEST(PoseCellNetwork, SubmapOffsetTakesTheWallsOfBothVisitsOverTheView) {
     cfg.exp_submap_offset = c.on;
     cfg.exp_submap_min_age_frames = c.min_age;
     PoseCellNetwork net(cfg);
-    Pose2D truth;  // the odometry reads the motion exactly: the network's odometry frame is the world's
-    uint32_t next = 0;
-    auto drive = [&](double d, double turn, uint32_t tid, bool is_new) {
-      truth = Compose(truth, {d, 0.0, turn});
-      const FloorBoundary seen = ScanOfWalls(room, truth.x, truth.y, truth.theta);
-      return net.ProcessFrame(d, turn, 1.0, {tid, is_new, 0.0}, &seen);
-    };
-    for (int k = 0; k < 10; ++k) ASSERT_EQ(drive(0.4, 0.0, next++, true).kind, Action::Kind::kCreate);
-    for (const auto& [step, n] : {std::pair{0.4, 5}, std::pair{0.4, 10}, std::pair{0.34, 5}}) {
-      drive(0.0, kPi / 2, next++, true);
-      for (int i = 0; i < n; ++i) drive(step, 0.0, next++, true);
-    }
-    drive(0.0, kPi / 2, next++, true);  // at (0, 0.3) facing east
     int recognised = 0;
-    for (uint32_t k = 0; k < 10; ++k) {
-      const Action a = drive(0.4, 0.0, k, false);
-      if (a.kind != Action::Kind::kLink && a.kind != Action::Kind::kSet) continue;
+    const std::vector<Action> back = DrivePillarLoop(net, kPillarRoom, kPillarRoom);
+    for (uint32_t k = 0; k < back.size(); ++k) {
+      const Action& a = back[k];
+      if (!Recognises(a)) continue;
       ++recognised;
       EXPECT_EQ(a.experience_id, k);
       EXPECT_NEAR(a.offset_x_m, 0.0, c.beside ? 0.03 : 1e-9) << k;
       EXPECT_NEAR(a.offset_y_m, c.beside ? 0.3 : 0.0, c.beside ? 0.03 : 1e-9) << k;
     }
     EXPECT_GE(recognised, 8);
+  }
+}
+
+// exp_submap_check: the views say the robot is back on the pillar loop's first pass, but after
+// that pass the room stands 1.2 m further east. With ten frames of walls around each visit (the
+// first visit's are then the first pass's alone) the two visits' walls do not align, so each
+// link is refused: a new experience, refused_link_to naming the place. With the key off those
+// places are linked, and so they are with the key on in the same room (thirty frames, as the demo).
+TEST(PoseCellNetwork, SubmapCheckRefusesALinkWhoseVisitsWallsDisagree) {
+  std::vector<Wall> moved = kPillarRoom;
+  for (Wall& w : moved) {
+    w.x0 += 1.2;
+    w.x1 += 1.2;
+  }
+  struct Case {
+    bool check;
+    const std::vector<Wall>* then;
+    int frames;
+    bool linked;
+  };
+  for (const Case& c : {Case{true, &moved, 10, false}, Case{false, &moved, 10, true},
+                        Case{true, &kPillarRoom, 30, true}}) {
+    PoseCellConfig cfg = SmallConfig();
+    cfg.exp_view_offset = true;
+    cfg.exp_submap_offset = true;
+    cfg.exp_submap_min_age_frames = 10;
+    cfg.exp_submap_frames = c.frames;
+    cfg.exp_submap_check = c.check;
+    PoseCellNetwork net(cfg);
+    const std::vector<Action> back = DrivePillarLoop(net, kPillarRoom, *c.then);
+    int recognised = 0, refused = 0;
+    for (uint32_t k = 0; k < back.size(); ++k) {
+      recognised += Recognises(back[k]);
+      if (back[k].refused_link_to != kNoExperience) {
+        ++refused;
+        EXPECT_EQ(back[k].kind, Action::Kind::kCreate) << k;
+        EXPECT_EQ(back[k].refused_link_to, k) << k;
+      }
+    }
+    EXPECT_EQ(recognised, c.linked ? 10 : 0) << c.check << " " << c.frames;
+    EXPECT_EQ(refused, c.linked ? 0 : 10) << c.check << " " << c.frames;
   }
 }
 
@@ -639,13 +695,17 @@ TEST(PoseCellNetwork, LoadRefusesStateOfOtherDimensionsOrInconsistentIds) {
 }
 
 TEST(PoseCellNetwork, ConfigValidationNamesTheKey) {
-  PoseCellConfig c;
-  c.pc_w_e_dim = 6;
-  try {
-    c.Validate();
-    FAIL();
-  } catch (const ConfigError& e) {
-    EXPECT_EQ(e.key(), "pc_w_e_dim");
+  PoseCellConfig even_kernel;
+  even_kernel.pc_w_e_dim = 6;
+  PoseCellConfig check_without_walls;
+  check_without_walls.exp_submap_check = true;  // exp_submap_offset off
+  for (const auto& [c, key] : {std::pair{even_kernel, "pc_w_e_dim"}, std::pair{check_without_walls, "exp_submap_check"}}) {
+    try {
+      c.Validate();
+      ADD_FAILURE() << key;
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(e.key(), key);
+    }
   }
 }
 
