@@ -83,8 +83,8 @@ class PoseCellsNode::Processor {
     {
       std::lock_guard lock(mutex_);
       stopped_ = true;
-      if (config_.network.exp_boundary_check)
-        spdlog::info("floor boundary check: {} loop closures refused", refused_links_);
+      if (config_.network.exp_boundary_check || config_.network.exp_submap_check)
+        spdlog::info("floor boundary checks: {} loop closures refused", refused_links_);
     }
     SaveState();
   }
@@ -199,7 +199,7 @@ class PoseCellsNode::Processor {
     }
     if (action.refused_link_to != kNoExperience) {
       ++refused_links_;
-      spdlog::debug("frame {}: link to experience {} refused by the floor boundary ({} so far)", header.frame_seq,
+      spdlog::debug("frame {}: link to experience {} refused by the floor boundaries ({} so far)", header.frame_seq,
                     action.refused_link_to, refused_links_);
     }
     msg::PoseCellAction out = ToActionMessage(action, next_action_seq_++, vtrans, vrot, dt);
@@ -362,7 +362,7 @@ class PoseCellsNode::Processor {
   PoseCellNetwork network_;
   Joiner joiner_;
   uint64_t reported_incomplete_ = 0;
-  uint64_t refused_links_ = 0;  // exp_boundary_check
+  uint64_t refused_links_ = 0;  // exp_boundary_check, exp_submap_check
   FloorBoundary boundary_;      // the frame's, reused
   uint64_t next_action_seq_ = 0;
   bool has_last_frame_ = false;
