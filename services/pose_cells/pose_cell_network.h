@@ -21,7 +21,9 @@
 //      an old experience must also pass the floor-boundary check (boundary_match.h), else the
 //      network makes a new experience; with exp_boundary_offset a link or set whose two
 //      boundaries align carries the registered offset of the robot from the experience; with
-//      exp_view_offset the offset measured from the best recent view and the odometry instead.
+//      exp_view_offset the offset measured from the best recent view and the odometry instead;
+//      with exp_submap_offset the one registering both visits' walls, whose disagreement
+//      refuses a new link under exp_submap_check.
 //
 // Speed: activity is compact, so every pass runs only over the product of the active index sets
 // of x, y and theta (dilated by the kernel radius or the shift); buffers are preallocated and
