@@ -445,7 +445,8 @@ TEST(PoseCellNetwork, ViewOffsetSaysWhereThePlaceWasRecognisedFromTheBestViewAnd
 const std::vector<Wall> kPillarRoom = {{-1.5, -1.0, 5.5, -1.0}, {5.5, -1.0, 5.5, 3.0}, {5.5, 3.0, -1.5, 3.0},
                                        {-1.5, 3.0, -1.5, -1.0}, {2.0, -1.0, 2.0, -0.6}, {2.0, -0.6, 2.4, -0.6},
                                        {2.4, -0.6, 2.4, -1.0}};
-std::vector<Action> DrivePillarLoop(PoseCellNetwork& net, const std::vector<Wall>& first, const std::vector<Wall>& then) {
+std::vector<Action> DrivePillarLoop(PoseCellNetwork& net, const std::vector<Wall>& first,
+                                    const std::vector<Wall>& then) {
   Pose2D truth;
   uint32_t next = 0;
   const std::vector<Wall>* walls = &first;
@@ -699,7 +700,8 @@ TEST(PoseCellNetwork, ConfigValidationNamesTheKey) {
   even_kernel.pc_w_e_dim = 6;
   PoseCellConfig check_without_walls;
   check_without_walls.exp_submap_check = true;  // exp_submap_offset off
-  for (const auto& [c, key] : {std::pair{even_kernel, "pc_w_e_dim"}, std::pair{check_without_walls, "exp_submap_check"}}) {
+  for (const auto& [c, key] :
+       {std::pair{even_kernel, "pc_w_e_dim"}, std::pair{check_without_walls, "exp_submap_check"}}) {
     try {
       c.Validate();
       ADD_FAILURE() << key;
