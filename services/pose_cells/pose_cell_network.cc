@@ -924,9 +924,11 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
       std::optional<BoundaryMatch> match;
       if (checked || (recognised && config_.exp_boundary_offset)) match = MatchBoundary(experiences_[matched], boundary);
       const bool aligns = match && BoundaryAligns(*match);
-      // The walls of both visits (exp_submap_offset), and whether they refuse a new link.
+      const bool boundary_refuses = checked && !aligns;
+      // The walls of both visits (exp_submap_offset), and whether they refuse a new link; not
+      // registered when the one frame's boundary already refused it.
       std::optional<BoundaryMatch> walls;
-      if (recognised && config_.exp_submap_offset &&
+      if (recognised && !boundary_refuses && config_.exp_submap_offset &&
           frames_processed_ - experiences_[matched].created_frame >=
               static_cast<uint64_t>(config_.exp_submap_min_age_frames)) {
         walls = MatchSubmaps(matched);
@@ -935,7 +937,7 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
       const bool walls_refuse = config_.exp_submap_check && !linked && walls && !walls_align;
       if (!recognised) {
         create();
-      } else if ((checked && !aligns) || walls_refuse) {
+      } else if (boundary_refuses || walls_refuse) {
         create();
         action.refused_link_to = matched;
       } else {
