@@ -6,9 +6,10 @@
 // Out: odometry/velocity (msg::Velocity, header copied from the frame, source VELOCITY_VISUAL;
 //      in wheel mode the wheel messages as they are).
 //
-// With floor_odometry.enabled (bgr8 images of a camera of known height over a flat floor of one
-// colour), the velocity is the floor-boundary registration's (floor_odometry.h), seeded by the
-// column profiles, which stand in for frames it cannot register.
+// Each frame is read by CameraOdometry (camera_odometry.h): the column profiles' velocity, or with
+// floor_odometry.enabled (bgr8 images of a camera of known height over a flat floor of one
+// colour) the floor-boundary registration's (floor_odometry.h), seeded by the column profiles,
+// which stand in for frames it cannot register.
 //
 // dt is the difference of consecutive frame stamps, never the wall clock. The first frame (and
 // the first after a restart of the visual odometry) is answered with zero velocity and dt 0, so

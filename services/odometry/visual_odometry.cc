@@ -43,6 +43,15 @@ double HalvesShift(double left, double right, std::optional<double> previous, st
   return SharedShift(left, right);
 }
 
+// Of the candidates, the one nearest `target` if it is within `tolerance` of it.
+std::optional<double> NearestWithin(std::initializer_list<double> candidates, double target, double tolerance) {
+  std::optional<double> nearest;
+  for (double c : candidates)
+    if (std::abs(c - target) <= tolerance && (!nearest || std::abs(c - target) < std::abs(*nearest - target)))
+      nearest = c;
+  return nearest;
+}
+
 // prefix[i] = sum of p[n] for n < i, in double: the sum over any overlap in O(1), to well under
 // float precision.
 void PrefixSums(std::span<const float> p, std::vector<double>& prefix) {
@@ -229,6 +238,7 @@ void VisualOdometry::Reset() {
   has_previous_ = false;
   turning_shift_px_.reset();
   turning_shift_before_px_.reset();
+  agreed_turn_shift_px_.reset();
   image_size_ = cv::Size(0, 0);
 }
 
@@ -275,6 +285,19 @@ double SubpixelOffset(std::span<const float> current, std::span<const float> pre
   return std::clamp((left - right) / (2.0 * slope), -0.5, 0.5);
 }
 
+// Each entry replaced by the mean of the entries within `radius` of it (fewer at the ends): a box
+// filter, which moves with the profile, so a turn's shift is kept.
+void SmoothProfile(std::vector<float>& profile, int radius) {
+  if (radius <= 0 || profile.empty()) return;
+  std::vector<double> prefix;
+  PrefixSums(profile, prefix);
+  const int n = static_cast<int>(profile.size());
+  for (int i = 0; i < n; ++i) {
+    const int lo = std::max(i - radius, 0), hi = std::min(i + radius + 1, n);
+    profile[i] = static_cast<float>((prefix[hi] - prefix[lo]) / (hi - lo));
+  }
+}
+
 }  // namespace
 
 Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
@@ -302,12 +325,14 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
     vrot_crop_ = vrot_crop;
     CropProfile(image, vtrans_crop_, vtrans_previous_);
     CropProfile(image, vrot_crop_, vrot_previous_);
+    SmoothProfile(vrot_previous_, config_.rotation_profile_smoothing_px);
     has_previous_ = true;
     return Velocity{};
   }
 
   CropProfile(image, vtrans_crop_, vtrans_profile_);
   CropProfile(image, vrot_crop_, vrot_profile_);
+  SmoothProfile(vrot_profile_, config_.rotation_profile_smoothing_px);
   // The rotation profile's shift (refined below a pixel with subpixel_rotation) over [first, first + width).
   const auto rotation_shift = [&](size_t first, size_t width) {
     const std::span<const float> current(vrot_profile_.data() + first, width);
@@ -321,11 +346,19 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   };
   const size_t rotation_width = vrot_profile_.size();
   std::pair<int, double> rotation;
+  bool halves_agree = false;
   if (config_.rotation_from_halves) {
     const size_t half = rotation_width / 2;
     const auto left = rotation_shift(0, half), right = rotation_shift(rotation_width - half, half);
-    const double shared = HalvesShift(left.second, right.second, turning_shift_px_, turning_shift_before_px_,
-                                      config_.turn_continuity_px);
+    double shared = HalvesShift(left.second, right.second, turning_shift_px_, turning_shift_before_px_,
+                                config_.turn_continuity_px);
+    halves_agree = std::abs(left.second - right.second) <= config_.turn_continuity_px;
+    if (config_.turn_continuity_agreed_rate && !halves_agree && agreed_turn_shift_px_) {
+      const double whole = rotation_shift(0, rotation_width).second;
+      if (const auto nearest = NearestWithin({left.second, right.second, whole}, *agreed_turn_shift_px_,
+                                             config_.turn_continuity_px))
+        shared = *nearest;
+    }
     rotation = {static_cast<int>(std::lround(shared)), shared};
   } else {
     rotation = rotation_shift(0, rotation_width);
@@ -349,6 +382,8 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   if (turning) velocity.vtrans = 0.0;
   turning_shift_before_px_ = turning_shift_px_;
   turning_shift_px_ = turning ? std::optional<double>(rotation.second) : std::nullopt;
+  if (!turning) agreed_turn_shift_px_.reset();
+  else if (halves_agree) agreed_turn_shift_px_ = rotation.second;
   return velocity;
 }
 

@@ -105,6 +105,8 @@ class VisualOdometry {
   bool has_previous_ = false;
   // The rotation shifts of the last two frames while they were turns on the spot (turn_continuity_px).
   std::optional<double> turning_shift_px_, turning_shift_before_px_;
+  // The last shift of the running turn on the spot whose halves agreed (turn_continuity_agreed_rate).
+  std::optional<double> agreed_turn_shift_px_;
   std::vector<float> vtrans_profile_, vtrans_previous_;
   std::vector<float> vrot_profile_, vrot_previous_;
   cv::Mat crop_grey_;  // a colour frame's crop converted to grey (reused from frame to frame)

@@ -55,6 +55,18 @@ struct VisualOdometryConfig {
   // turn. Such a frame read as no turn lost the whole frame's turn, and the floor registration
   // seeded with it could read it as driving (0.36 rad lost in one turn of a demo run). 0 = off.
   double turn_continuity_px = 0.0;
+  // With turn_continuity_px, the turn also goes on at the rate of its last frame whose halves
+  // agreed (within turn_continuity_px; the robot turns at one rate): halves more than that apart
+  // give whichever of the two halves and the whole crop's match is nearest that rate, if one is
+  // within turn_continuity_px. Close beside a wall the halves' matches are poor (a turn's halves
+  // there agreed in few frames in a row, so the steady turn above kept breaking) while the whole
+  // crop, twice as wide, mostly still finds the turn. The rate is forgotten when a frame is no
+  // turn on the spot.
+  bool turn_continuity_agreed_rate = false;
+  // The rotation profile is smoothed by a moving mean over this many columns each side before it
+  // is matched: a wall close by at a slant shows stripes a pixel or two wide (the texture seen
+  // edge-on), which a turn of a fraction of a pixel more or less changes column by column.
+  int rotation_profile_smoothing_px = 0;
 
   template <class V>
   void VisitFields(V& v) {
@@ -84,6 +96,10 @@ struct VisualOdometryConfig {
       "rotation = the shift the rotation crop's two halves, matched apart, share (flow only one half shows is not a turn)");
     v("turn_continuity_px", turn_continuity_px,
       "steady turn on the spot, halves this many px apart: the one this near the last shift is the turn (0 = off)");
+    v("turn_continuity_agreed_rate", turn_continuity_agreed_rate,
+      "a turn on the spot goes on at the rate its halves last agreed on: halves apart take the half or whole crop nearest it");
+    v("rotation_profile_smoothing_px", rotation_profile_smoothing_px,
+      "the rotation profile is smoothed by a moving mean over this many columns each side before matching (0 = off)");
   }
 
   void Validate() const {
@@ -104,6 +120,8 @@ struct VisualOdometryConfig {
     Require(vtrans_noise_floor >= 0, "vtrans_noise_floor", "must be >= 0");
     Require(turn_in_place_vrot_radps >= 0, "turn_in_place_vrot_radps", "must be >= 0");
     Require(turn_continuity_px >= 0, "turn_continuity_px", "must be >= 0");
+    Require(rotation_profile_smoothing_px >= 0 && rotation_profile_smoothing_px <= 64, "rotation_profile_smoothing_px",
+            "must be 0..64");
   }
 };
 

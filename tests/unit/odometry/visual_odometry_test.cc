@@ -166,6 +166,53 @@ TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
   EXPECT_THROW(negative.Validate(), ConfigError);
 }
 
+TEST(VisualOdometryTest, AgreedRateKeepsATurnWhoseHalvesAgreedUntilOneMismatches) {
+  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
+  const cv::Mat left = Texture(800, 480, 11), right = Texture(800, 480, 12);
+  const auto frame = [&](int left_offset, int right_offset) {
+    cv::Mat out;
+    cv::hconcat(View(left, left_offset, 320), View(right, right_offset, 320), out);
+    return out;
+  };
+  VisualOdometryConfig config;
+  config.rotation_from_halves = true;
+  config.subpixel_rotation = true;
+  config.turn_in_place_vrot_radps = 0.12;
+  config.turn_continuity_px = 3;
+  // One frame of a turn, 20 px, both halves agreeing; then the right half matches 10 px the other
+  // way. One turning frame is no steady turn yet (turn_continuity_px alone reads no turn), but
+  // its halves agreed on the rate, and the left half goes on at it.
+  const auto after_mismatch = [&](bool agreed_rate, bool stop_between) {
+    config.turn_continuity_agreed_rate = agreed_rate;
+    VisualOdometry vo(config);
+    vo.Update(frame(400, 400), kDt);
+    EXPECT_NEAR(vo.Update(frame(380, 380), kDt).vrot * kDt / rad_per_px, 20.0, 0.2);
+    if (stop_between) EXPECT_NEAR(vo.Update(frame(380, 380), kDt).vrot * kDt / rad_per_px, 0.0, 0.1);
+    return vo.Update(frame(360, 390), kDt).vrot * kDt / rad_per_px;
+  };
+  EXPECT_NEAR(after_mismatch(false, false), 0.0, 1e-9);
+  EXPECT_NEAR(after_mismatch(true, false), 20.0, 1.0);
+  // A frame that is no turn on the spot ends the turn and its rate.
+  EXPECT_NEAR(after_mismatch(true, true), 0.0, 1e-9);
+}
+
+TEST(VisualOdometryTest, SmoothedRotationProfileKeepsTheTurn) {
+  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
+  const cv::Mat wide = Texture(760, 480, 2);
+  for (const int smoothing : {0, 2, 8}) {
+    VisualOdometryConfig config;
+    config.subpixel_rotation = true;
+    config.rotation_profile_smoothing_px = smoothing;
+    VisualOdometry vo(config);
+    vo.Update(View(wide, 60, 640), kDt);
+    for (int shift : {12, -25}) {
+      const Velocity v = vo.Update(View(wide, 60 - shift, 640), kDt);
+      EXPECT_NEAR(v.vrot * kDt / rad_per_px, shift, 0.2) << "smoothing " << smoothing;
+      vo.Update(View(wide, 60, 640), kDt);  // back
+    }
+  }
+}
+
 TEST(VisualOdometryTest, SubpixelRotationRecoversAFractionalShift) {
   // The scene moved right by 12.4 px: the view of a 5x wider texture resampled at 1/5 pixel.
   const cv::Mat wide = Texture(5 * 760, 480, 3, 40);
@@ -392,6 +439,16 @@ TEST(VisualOdometryTest, RejectsBadConfigNamingTheKey) {
   VisualOdometryConfig fov;
   fov.camera_fov_deg = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(VisualOdometry{fov}, ConfigError);
+  for (const int smoothing : {-1, 65}) {
+    VisualOdometryConfig smooth;
+    smooth.rotation_profile_smoothing_px = smoothing;
+    try {
+      VisualOdometry vo(smooth);
+      FAIL() << "accepted rotation_profile_smoothing_px " << smoothing;
+    } catch (const ConfigError& e) {
+      EXPECT_EQ(e.key(), "rotation_profile_smoothing_px");
+    }
+  }
 }
 
 TEST(VisualOdometryTest, IratFramesRunWithThePreset) {
