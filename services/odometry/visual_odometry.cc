@@ -382,7 +382,10 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   if (turning) velocity.vtrans = 0.0;
   turning_shift_before_px_ = turning_shift_px_;
   turning_shift_px_ = turning ? std::optional<double>(rotation.second) : std::nullopt;
-  if (!turning) agreed_turn_shift_px_.reset();
+  // Halves agreeing on another rate (a turn's last, partial frame) end the turn's rate.
+  const bool rate_changed = halves_agree && agreed_turn_shift_px_ &&
+                            std::abs(rotation.second - *agreed_turn_shift_px_) > config_.turn_continuity_px;
+  if (!turning || rate_changed) agreed_turn_shift_px_.reset();
   else if (halves_agree) agreed_turn_shift_px_ = rotation.second;
   return velocity;
 }

@@ -61,7 +61,8 @@ struct VisualOdometryConfig {
   // within turn_continuity_px. Close beside a wall the halves' matches are poor (a turn's halves
   // there agreed in few frames in a row, so the steady turn above kept breaking) while the whole
   // crop, twice as wide, mostly still finds the turn. The rate is forgotten when a frame is no
-  // turn on the spot.
+  // turn on the spot or its halves agree on another rate (a turn's last, partial frame: driving
+  // on after it, a half's flow near that rate read as the turn going on).
   bool turn_continuity_agreed_rate = false;
   // The rotation profile is smoothed by a moving mean over this many columns each side before it
   // is matched: a wall close by at a slant shows stripes a pixel or two wide (the texture seen

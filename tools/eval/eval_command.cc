@@ -6,17 +6,22 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "common/config/config_error.h"
 #include "common/config/config_loader.h"
+#include "common/bus/typed_cdr.h"
+#include "common/mcap/mcap_reader.h"
 #include "tools/eval/image_folder.h"
+#include "tools/eval/odometry_replay.h"
 #include "tools/eval/patch_normalised_sad.h"
 #include "tools/eval/template_difference_matrix.h"
 #include "tools/eval/trajectory_csv.h"
 #include "tools/eval/vpr_evaluation.h"
+#include "tools/sim/sim_node.h"
 
 namespace rslam::eval {
 
@@ -45,6 +50,14 @@ struct TrajectoryCommandOptions {
   std::string truth_file;
   bool no_scale = false;
   double max_stamp_gap_ms = 10.0;
+  bool json = false;
+};
+
+struct OdometryCommandOptions {
+  std::string recording;
+  std::string config_file = RSLAM_EVAL_DEFAULT_DEMO_CONFIG;
+  std::vector<std::string> overrides;
+  std::string robot;
   bool json = false;
 };
 
@@ -164,6 +177,89 @@ void RunTrajectory(const TrajectoryCommandOptions& options, std::ostream& out, s
   }
 }
 
+// The recording's frames (sim/ground_truth) with their recorded odometry/velocity, of one robot
+// (the first one seen, unless named).
+std::vector<ReplayedFrame> RecordedFrames(const std::string& path, std::string& robot) {
+  std::map<uint64_t, ReplayedFrame> frames;
+  std::map<uint64_t, msg::Velocity> velocities;
+  const mcap::McapReader reader(path);
+  reader.ForEachMessage({}, [&](const mcap::MessageView& m) {
+    const std::string& topic = m.channel->topic;
+    const bool truth = topic.ends_with("/sim/ground_truth"), velocity = topic.ends_with("/odometry/velocity");
+    if (!truth && !velocity) return;
+    const std::span<const uint8_t> cdr(reinterpret_cast<const uint8_t*>(m.data.data()), m.data.size());
+    if (truth) {
+      const auto t = bus::FromCdr<msg::GroundTruthPose>(cdr);
+      if (robot.empty()) robot = t.header.robot_id;
+      if (t.header.robot_id != robot) return;
+      ReplayedFrame& frame = frames[t.header.frame_seq];
+      frame.frame_seq = t.header.frame_seq;
+      frame.stamp_ns = t.header.stamp_ns;
+      frame.truth = {t.x_m, t.y_m, t.theta_rad};
+    } else {
+      auto v = bus::FromCdr<msg::Velocity>(cdr);
+      velocities[v.header.frame_seq] = std::move(v);
+    }
+  });
+  std::vector<ReplayedFrame> out;
+  out.reserve(frames.size());
+  for (auto& [seq, frame] : frames) {
+    const auto v = velocities.find(seq);
+    if (v != velocities.end() && v->second.header.robot_id == robot) {
+      frame.recorded_vtrans_mps = v->second.vtrans_mps;
+      frame.recorded_vrot_radps = v->second.vrot_radps;
+    }
+    out.push_back(frame);
+  }
+  return out;
+}
+
+void RunOdometry(const OdometryCommandOptions& options, std::ostream& out, std::ostream& err) {
+  try {
+    YAML::Node config = LoadYamlFile(options.config_file);
+    for (const std::string& assignment : options.overrides) ApplyOverride(config, assignment);
+    sim::SimNodeConfig sim;
+    LoadConfigSection(config, "sim", sim);
+    odometry::OdometryNodeConfig odometry;
+    LoadConfigSection(config, "odometry", odometry);
+    std::string robot = options.robot;
+    const std::vector<ReplayedFrame> frames = RecordedFrames(options.recording, robot);
+    if (frames.size() < 2) Fail(err, "odometry", options.recording + " holds fewer than two sim/ground_truth frames");
+    const sim::WorldMap world = sim::WorldMap::LoadFromYaml(sim::ResolveWorldPath(sim.sim.world_yaml));
+    const OdometryReplayResult r = ReplayOdometry(world, sim.sim, odometry, frames);
+    if (options.json) {
+      const nlohmann::json json = {
+          {"robot", robot},
+          {"frames", r.frames},
+          {"ate_m", r.ate_m},
+          {"scale", r.scale},
+          {"heading_rms_rad", r.heading_rms_rad},
+          {"final_heading_error_rad", r.final_heading_error_rad},
+          {"turn_frames_misread", r.turn_frames_misread},
+          {"turn_error_sum_rad", r.turn_error_sum_rad},
+          {"frames_recorded", r.frames_recorded},
+          {"frames_differing_from_recorded", r.frames_differing_from_recorded},
+      };
+      out << json.dump() << "\n";
+    } else {
+      char line[400];
+      std::snprintf(line, sizeof line,
+                    "%s: %zu frames; dead reckoning ATE %.3f m (scale %.3f), heading RMS %.3f rad, final heading "
+                    "error %.3f rad; %zu turning frames misread (> 0.03 rad), turn error %.2f rad in all; %zu of %zu "
+                    "recorded velocities differ",
+                    robot.c_str(), r.frames, r.ate_m, r.scale, r.heading_rms_rad, r.final_heading_error_rad,
+                    r.turn_frames_misread, r.turn_error_sum_rad, r.frames_differing_from_recorded, r.frames_recorded);
+      out << line << "\n";
+    }
+  } catch (const CLI::Error&) {
+    throw;
+  } catch (const ConfigError& e) {
+    Fail(err, "odometry", "bad config " + options.config_file + ": " + e.what());
+  } catch (const std::exception& e) {
+    Fail(err, "odometry", e.what());
+  }
+}
+
 }  // namespace
 
 void RegisterEvalCommand(CLI::App& rslam, std::ostream& out, std::ostream& err) {
@@ -211,6 +307,21 @@ void RegisterEvalCommand(CLI::App& rslam, std::ostream& out, std::ostream& err) 
       ->check(CLI::Range(0.0, 1e9));
   trajectory->add_flag("--json", trajectory_options->json, "Print the result as one JSON object");
   trajectory->callback([trajectory_options, &out, &err] { RunTrajectory(*trajectory_options, out, err); });
+
+  auto odometry_options = std::make_shared<OdometryCommandOptions>();
+  CLI::App* odometry = eval->add_subcommand(
+      "odometry", "A simulated run's odometry read again: its frames rendered anew at the recorded ground truth, "
+                  "read as the odometry service reads them, dead-reckoned against the truth");
+  odometry->add_option("recording", odometry_options->recording, "MCAP recording with sim/ground_truth (rslam demo)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  odometry->add_option("--config", odometry_options->config_file,
+                       "config with the run's sim and odometry sections (default: deploy/config/demo.yaml)")
+      ->check(CLI::ExistingFile);
+  odometry->add_option("--set", odometry_options->overrides, "override a config key (section.key=value), repeatable");
+  odometry->add_option("--robot", odometry_options->robot, "the robot to replay (default: the first recorded)");
+  odometry->add_flag("--json", odometry_options->json, "Print the result as one JSON object");
+  odometry->callback([odometry_options, &out, &err] { RunOdometry(*odometry_options, out, err); });
 }
 
 void RegisterEvalCommand(CLI::App& rslam) { RegisterEvalCommand(rslam, std::cout, std::cerr); }

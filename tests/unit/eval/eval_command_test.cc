@@ -17,17 +17,8 @@ namespace rslam::eval {
 namespace {
 
 using rslam::testing::ScratchFolderForTest;
+using testing::RunRslam;
 using testing::WriteText;
-
-// Runs `rslam <args>` with only the eval command; returns what it printed.
-std::string RunRslam(std::vector<std::string> args) {
-  std::ostringstream out, err;
-  CLI::App app{"rslam"};
-  RegisterEvalCommand(app, out, err);
-  std::reverse(args.begin(), args.end());  // CLI11 takes the arguments last-first
-  app.parse(args);
-  return out.str();
-}
 
 TEST(EvalCommand, TrajectoryPrintsAteAsJson) {
   const auto dir = ScratchFolderForTest();

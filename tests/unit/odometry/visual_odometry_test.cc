@@ -44,6 +44,21 @@ cv::Mat AddNoise(const cv::Mat& grey, double sigma, uint64_t seed) {
 
 constexpr double kDt = 0.1;
 
+// A 640-px frame whose left and right halves are two textures, each seen from its own offset (a
+// smaller one moves it right), so the two halves can shift by different amounts.
+class TwoHalves {
+ public:
+  TwoHalves() : left_(Texture(800, 480, 11)), right_(Texture(800, 480, 12)) {}
+  cv::Mat operator()(int left_offset, int right_offset) const {
+    cv::Mat out;
+    cv::hconcat(View(left_, left_offset, 320), View(right_, right_offset, 320), out);
+    return out;
+  }
+
+ private:
+  const cv::Mat left_, right_;
+};
+
 TEST(VisualOdometryTest, ShiftedProfileDifferenceIsEq4OnHandComputedArrays) {
   const std::vector<float> previous = {0, 1, 2, 3};
   const std::vector<float> current = {1, 2, 3, 4};
@@ -133,13 +148,7 @@ TEST(VisualOdometryTest, SceneMovingRightIsCounterClockwiseRotationOfExpectedMag
 
 TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
   const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
-  const cv::Mat left = Texture(800, 480, 11), right = Texture(800, 480, 12);
-  // Each frame's left and right halves seen from their own offsets (a smaller one moves them right).
-  const auto frame = [&](int left_offset, int right_offset) {
-    cv::Mat out;
-    cv::hconcat(View(left, left_offset, 320), View(right, right_offset, 320), out);
-    return out;
-  };
+  const TwoHalves frame;
   // Turning on the spot 20 px a frame (0.29 rad/s); in the last frame the right half matches
   // 10 px the other way (a stretch of wall that repeats), and the halves share no shift.
   const auto last_turn = [&](double continuity_px, int turning_frames) {
@@ -168,12 +177,7 @@ TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
 
 TEST(VisualOdometryTest, AgreedRateKeepsATurnWhoseHalvesAgreedUntilOneMismatches) {
   const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
-  const cv::Mat left = Texture(800, 480, 11), right = Texture(800, 480, 12);
-  const auto frame = [&](int left_offset, int right_offset) {
-    cv::Mat out;
-    cv::hconcat(View(left, left_offset, 320), View(right, right_offset, 320), out);
-    return out;
-  };
+  const TwoHalves frame;
   VisualOdometryConfig config;
   config.rotation_from_halves = true;
   config.subpixel_rotation = true;
@@ -194,6 +198,14 @@ TEST(VisualOdometryTest, AgreedRateKeepsATurnWhoseHalvesAgreedUntilOneMismatches
   EXPECT_NEAR(after_mismatch(true, false), 20.0, 1.0);
   // A frame that is no turn on the spot ends the turn and its rate.
   EXPECT_NEAR(after_mismatch(true, true), 0.0, 1e-9);
+  // So do halves agreeing on a slower turn (a turn's last, partial frame): driving on after it,
+  // the right half's 9 px is not taken for a turn going on at 10.
+  config.turn_continuity_agreed_rate = true;
+  VisualOdometry vo(config);
+  vo.Update(frame(400, 400), kDt);
+  vo.Update(frame(380, 380), kDt);
+  EXPECT_NEAR(vo.Update(frame(370, 370), kDt).vrot * kDt / rad_per_px, 10.0, 0.2);
+  EXPECT_NEAR(vo.Update(frame(374, 361), kDt).vrot, 0.0, 1e-9);
 }
 
 TEST(VisualOdometryTest, SmoothedRotationProfileKeepsTheTurn) {
