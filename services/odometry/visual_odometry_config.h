@@ -121,6 +121,8 @@ struct VisualOdometryConfig {
     Require(vtrans_noise_floor >= 0, "vtrans_noise_floor", "must be >= 0");
     Require(turn_in_place_vrot_radps >= 0, "turn_in_place_vrot_radps", "must be >= 0");
     Require(turn_continuity_px >= 0, "turn_continuity_px", "must be >= 0");
+    Require(!turn_continuity_agreed_rate || (rotation_from_halves && turn_continuity_px > 0),
+            "turn_continuity_agreed_rate", "needs rotation_from_halves and turn_continuity_px > 0");
     Require(rotation_profile_smoothing_px >= 0 && rotation_profile_smoothing_px <= 64, "rotation_profile_smoothing_px",
             "must be 0..64");
   }

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -181,7 +182,7 @@ void RunTrajectory(const TrajectoryCommandOptions& options, std::ostream& out, s
 // (the first one seen, unless named).
 std::vector<ReplayedFrame> RecordedFrames(const std::string& path, std::string& robot) {
   std::map<uint64_t, ReplayedFrame> frames;
-  std::map<uint64_t, msg::Velocity> velocities;
+  std::map<std::pair<std::string, uint64_t>, msg::Velocity> velocities;  // by robot and frame
   const mcap::McapReader reader(path);
   reader.ForEachMessage({}, [&](const mcap::MessageView& m) {
     const std::string& topic = m.channel->topic;
@@ -198,14 +199,14 @@ std::vector<ReplayedFrame> RecordedFrames(const std::string& path, std::string& 
       frame.truth = {t.x_m, t.y_m, t.theta_rad};
     } else {
       auto v = bus::FromCdr<msg::Velocity>(cdr);
-      velocities[v.header.frame_seq] = std::move(v);
+      velocities[{v.header.robot_id, v.header.frame_seq}] = std::move(v);
     }
   });
   std::vector<ReplayedFrame> out;
   out.reserve(frames.size());
   for (auto& [seq, frame] : frames) {
-    const auto v = velocities.find(seq);
-    if (v != velocities.end() && v->second.header.robot_id == robot) {
+    const auto v = velocities.find({robot, seq});
+    if (v != velocities.end()) {
       frame.recorded_vtrans_mps = v->second.vtrans_mps;
       frame.recorded_vrot_radps = v->second.vrot_radps;
     }

@@ -451,6 +451,14 @@ TEST(VisualOdometryTest, RejectsBadConfigNamingTheKey) {
   VisualOdometryConfig fov;
   fov.camera_fov_deg = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(VisualOdometry{fov}, ConfigError);
+  VisualOdometryConfig agreed;
+  agreed.turn_continuity_agreed_rate = true;  // without rotation_from_halves and turn_continuity_px
+  try {
+    VisualOdometry vo(agreed);
+    FAIL() << "accepted turn_continuity_agreed_rate without halves";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.key(), "turn_continuity_agreed_rate");
+  }
   for (const int smoothing : {-1, 65}) {
     VisualOdometryConfig smooth;
     smooth.rotation_profile_smoothing_px = smoothing;
