@@ -8,7 +8,7 @@
 namespace rslam::odometry {
 
 CameraOdometry::CameraOdometry(const VisualOdometryConfig& visual, const FloorOdometryNodeConfig& floor)
-    : visual_config_(visual), floor_config_(floor), visual_(visual) {
+    : floor_config_(floor), visual_(visual) {
   floor_config_.Validate();
   if (floor_config_.enabled) {
     boundary_ = std::make_unique<occupancy::ObstacleProfilePipeline>(floor_config_.boundary);
@@ -29,7 +29,7 @@ const CameraOdometryFrame& CameraOdometry::Update(const cv::Mat& image, double d
   frame_.wall_direction.reset();
   frame_.boundary.clear();
   // A first frame's dt is ignored by the visual odometry but must be valid.
-  frame_.velocity = visual_.Update(image, dt_s > 0 ? dt_s : 1.0 / visual_config_.camera_hz);
+  frame_.velocity = visual_.Update(image, dt_s > 0 ? dt_s : 1.0 / visual_.config().camera_hz);
   if (floor_) FloorMotion(image, dt_s);
   return frame_;
 }
@@ -45,7 +45,7 @@ void CameraOdometry::FloorMotion(const cv::Mat& image, double dt_s) {
       floor_->Update(frame_.boundary, prior, moving_difference > 0 && velocity.speed_difference > moving_difference);
   frame_.wall_direction = WallDirection(frame_.boundary, floor_config_.wall_direction);
   if (dt_s <= 0) return;
-  const double turn_in_place = visual_config_.turn_in_place_vrot_radps;
+  const double turn_in_place = visual_.config().turn_in_place_vrot_radps;
   if (floor_config_.turns_from_profiles && turn_in_place > 0 && std::abs(velocity.vrot) >= turn_in_place) return;
   // Unregistered, the floor odometry returns the prior with its constant-velocity forward step.
   velocity.vtrans = motion.dx / dt_s;

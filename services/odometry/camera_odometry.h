@@ -53,7 +53,6 @@ class CameraOdometry {
   // Replaces frame_.velocity by the floor-boundary registration's (see the header comment).
   void FloorMotion(const cv::Mat& image, double dt_s);
 
-  const VisualOdometryConfig visual_config_;
   const FloorOdometryNodeConfig floor_config_;
   VisualOdometry visual_;
   std::unique_ptr<occupancy::ObstacleProfilePipeline> boundary_;  // floor odometry only

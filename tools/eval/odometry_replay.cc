@@ -16,7 +16,6 @@ namespace rslam::eval {
 OdometryReplayResult ReplayOdometry(const sim::WorldMap& world, const sim::SimConfig& sim,
                                     const odometry::OdometryNodeConfig& config, std::span<const ReplayedFrame> frames) {
   if (frames.size() < 2) throw std::invalid_argument("ReplayOdometry: fewer than two frames");
-  config.Validate();
   sim::CameraRenderer renderer(world, sim.scene, sim.camera);
   odometry::CameraOdometry odometry(config.visual, config.floor);
   OdometryReplayResult result;
