@@ -25,6 +25,8 @@ constexpr int kMaxReplansForBlockedMoves = 20;
 
 // Ways back driven along the trail (ExplorationPlanner::RecordMove), in all.
 constexpr int kMaxWayBacks = 5;
+constexpr int kMaxReturnsToStart = 3;  // return_to_start plans, each interrupted or not
+constexpr double kAtStartM = 0.5;       // a pirouette this close to the start is one there
 
 // Refused moves are counted against a goal in thirds: a refusal within kNearGoalM of where the
 // plan ends counts three, one farther off counts one (ExplorationPlanner::ReportBlocked).
@@ -97,6 +99,8 @@ void ExplorationPlanner::RecordPirouette(const Pose2D& where) {
   if (!IsFinite(where)) throw std::invalid_argument("pirouette pose is not finite");
   last_pirouette_ = where;
   blocking_obstacles_.clear();  // the grid has just been looked at all round
+  if (return_attempts_ > 0 && std::hypot(where.x - start_->x, where.y - start_->y) <= kAtStartM)
+    returned_to_start_ = true;
 }
 
 void ExplorationPlanner::RecordMove(const Pose2D& from, const Pose2D& to) {
@@ -356,6 +360,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   last_grid_ = cs;
   const int rx = cs.CellX(robot.x), ry = cs.CellY(robot.y);
   if (!cs.Contains(rx, ry)) throw std::invalid_argument("robot is outside the map");
+  if (!start_) start_ = robot;
   if (std::optional<Plan> out = StepOutOfRadius(occupancy, robot)) return *out;
   const int w = cs.width;
   const size_t n = cs.cells.size();
@@ -418,6 +423,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   bool squeezing = false;             // planning through the dilation margin (below)
   bool margin_goals_added = false;    // ... and to unknown space inside it
   bool uncertain_frontier_added = false;  // uncertain cells that border unknown space are goals
+  bool returning = false;                 // the goal is where exploration began (return_to_start)
   // An off-centre robot first steps to the centre of its cell, unless that step itself comes
   // closer to an obstacle than the robot already is (it stands off-centre beside a wall).
   const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
@@ -520,6 +526,16 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
         if (!finer.complete) finer.reason = "on the finer grid: " + finer.reason;
         return finer;
       }
+      if (config_.return_to_start && !returned_to_start_ && return_attempts_ < kMaxReturnsToStart) {
+        ++return_attempts_;
+        const int sx = cs.CellX(start_->x), sy = cs.CellY(start_->y);
+        if (cs.Contains(sx, sy) && (traversable[static_cast<size_t>(sy) * w + sx] || (sx == rx && sy == ry))) {
+          returning = true;
+          std::fill(goal.begin(), goal.end(), uint8_t{0});
+          goal[static_cast<size_t>(sy) * w + sx] = 1;
+          continue;
+        }
+      }
       plan.complete = true;
       plan.commands.push_back({MotionCommand::Kind::kStop});
       plan.reason = "no reachable unknown space remains (" + std::to_string(set_aside_.size()) +
@@ -563,6 +579,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     plan.goal_y = gy;
     plan.margin_goal = margin_goals_added && cs.margin_goal[static_cast<size_t>(gy) * w + gx];
     if (path.size() == 1) {
+      if (returning) return look_here(plan, "back where exploration began: pirouette");
       // The unknown is here or next door: look, unless we already have.
       if (looked_here) {
         SetAside(gx, gy, "still unknown after a pirouette at the nearest reachable cell");
@@ -600,14 +617,16 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     }
     // Without the closing pirouette the camera looks ahead on the way; unknown space it did not
     // see is next door at the next plan, which pirouettes there (the branch above).
-    if (config_.pirouette_at_goal)
+    if (config_.pirouette_at_goal || returning)
       plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
                                config_.pirouette_steps});
     plan.has_target = true;
     plan.target = {x, y, theta};
-    plan.reason = std::string(uncertain_frontier_added ? "to uncertain space bordering unknown, "
-                                                       : "to the nearest unknown space, ") +
-                  std::to_string(path.size() - 1) + " cells away" + (squeezing ? " through the margin" : "");
+    plan.reason = std::string(returning                  ? "back to where exploration began, "
+                              : uncertain_frontier_added ? "to uncertain space bordering unknown, "
+                                                         : "to the nearest unknown space, ") +
+                  std::to_string(path.size() - 1) + " cells away" + (squeezing ? " through the margin" : "") +
+                  (returning ? ", to look all round there" : "");
     // Look before you move, at planning time: a move of the plan that the caller's check would
     // refuse (the escape through the dilation margin, or the first step from an off-centre robot,
     // can pass closer to a wall than the robot radius) would count against goal after goal, each
@@ -689,6 +708,9 @@ proto::ExplorerState ExplorationPlanner::ToProto() const {
   state.set_finishing(finishing_);
   for (const Pose2D& p : trail_) SavePose(p, state.add_trail());
   state.set_way_backs(way_backs_);
+  if (start_) SavePose(*start_, state.mutable_start());
+  state.set_returned_to_start(returned_to_start_);
+  state.set_return_attempts(return_attempts_);
   return state;
 }
 
@@ -722,7 +744,13 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
     trail.push_back(LoadPose(p));
     if (!IsFinite(trail.back())) throw std::invalid_argument("explorer state: trail pose not finite");
   }
-  if (state.way_backs() < 0) throw std::invalid_argument("explorer state: negative way-back count");
+  if (state.way_backs() < 0 || state.return_attempts() < 0)
+    throw std::invalid_argument("explorer state: negative way-back or return count");
+  std::optional<Pose2D> start;
+  if (state.has_start()) {
+    start = LoadPose(state.start());
+    if (!IsFinite(*start)) throw std::invalid_argument("explorer state: start pose not finite");
+  }
   if (trail.size() > static_cast<size_t>(config_.way_back_moves))
     trail.erase(trail.begin(), trail.end() - config_.way_back_moves);
   set_aside_ = std::move(set_aside);
@@ -732,6 +760,9 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
   finishing_ = state.finishing();
   trail_ = std::move(trail);
   way_backs_ = state.way_backs();
+  start_ = start;
+  returned_to_start_ = state.returned_to_start();
+  return_attempts_ = state.return_attempts();
 }
 
 }  // namespace rslam::explorer

@@ -13,7 +13,9 @@
 //     bordered by cells seen too seldom to class); or unless a place the robot drove through
 //     lately reaches unknown space (the way back, RecordMove); or unless the finer grid of
 //     finishing_cell_factor, on which the planner then goes on to the end, still reaches unknown
-//     space;
+//     space; or unless return_to_start has not yet looked all round where exploration began (at
+//     most three plans back there: a grid that changes on the way, which blocks a move or shows
+//     unknown space again, interrupts one);
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
 //     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees;
@@ -177,6 +179,9 @@ class ExplorationPlanner {
   bool finishing_ = false;
   std::vector<Pose2D> trail_;  // RecordMove, oldest first
   int way_backs_ = 0;          // driven so far
+  std::optional<Pose2D> start_;      // the robot at the first PlanFrom
+  bool returned_to_start_ = false;   // a pirouette within kAtStartM of it (return_to_start)
+  int return_attempts_ = 0;          // plans back to it made
   CoarseGrid last_grid_;       // the last PlanFrom's (SetAsideAround)
 };
 

@@ -55,6 +55,11 @@ struct ExplorerConfig {
   // unknown and exploration ends. Finer cells all the way are slower (more, smaller goals).
   int finishing_cell_factor = 0;
   int finishing_min_unknown_cells = 1;  // min_unknown_cells_for_goal on the finer grid
+  // When nothing is left to explore, drive back once to where exploration began (the pose of the
+  // first plan) and look all round there before calling exploration complete: the views of the
+  // run's first look close the loop of the whole run (active loop closing). Exploration goes on if
+  // the corrected grid then shows unknown space again.
+  bool return_to_start = false;
 
   template <class V>
   void VisitFields(V& v) {
@@ -90,6 +95,8 @@ struct ExplorerConfig {
       "before calling exploration complete, go on with exploration cells of this many occupancy cells (0 = off)");
     v("finishing_min_unknown_cells", finishing_min_unknown_cells,
       "unknown occupancy cells needed to make a cell of that finer grid a goal");
+    v("return_to_start", return_to_start,
+      "when nothing is left to explore, drive back once to where exploration began and pirouette before completing");
   }
   void Validate() const {
     Require(std::isfinite(robot_radius_m) && robot_radius_m >= 0 && robot_radius_m < 10,

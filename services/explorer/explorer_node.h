@@ -18,7 +18,7 @@
 // reachable unknown remains it sends STOP and reports EXPLORATION_COMPLETE. When the service
 // stops (SIGTERM) with a command outstanding, it sends STOP and reports EXPLORATION_STOPPED. The
 // planner state (goals set aside, blocked counts, obstacles found by refused moves, last
-// pirouette, the trail of the last moves) and the command numbering persist in
+// pirouette, the trail of the last moves, where exploration began) and the command numbering persist in
 // <state_dir>/explorer.pb.
 
 #include <memory>

@@ -50,7 +50,8 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   ASSERT_EQ(demo.WaitExit(240s), std::optional<int>(0)) << demo.Tail();
   const std::string output = demo.Output();
 
-  for (const char* file : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid.pgm", "grid.yaml"})
+  for (const char* file : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid_errors.png", "grid.pgm",
+                           "grid.yaml"})
     EXPECT_TRUE(fs::exists(out / file) && fs::file_size(out / file) > 0) << file << "\n" << output;
   std::ifstream in(out / "summary.json");
   ASSERT_TRUE(in.good());

@@ -126,4 +126,45 @@ cv::Mat RenderOccupancy(const msg::OccupancyGrid& grid, std::span<const FramePos
   return image;
 }
 
+cv::Mat RenderGridComparison(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable,
+                             const Pose2D& map_origin, const msg::OccupancyGrid& grid, double tolerance_m) {
+  const int margin = static_cast<int>(std::ceil(1.0 / world.resolution()));
+  int min_x = world.width() - 1, min_y = world.height() - 1, max_x = 0, max_y = 0;
+  for (const auto& c : reachable)
+    min_x = std::min(min_x, c.x()), max_x = std::max(max_x, c.x()), min_y = std::min(min_y, c.y()), max_y = std::max(max_y, c.y());
+  if (reachable.empty()) min_x = min_y = 0, max_x = world.width() - 1, max_y = world.height() - 1;
+  min_x -= margin, min_y -= margin, max_x += margin, max_y += margin;
+  const int w = max_x - min_x + 1, h = max_y - min_y + 1;
+  std::vector<bool> is_reachable(static_cast<size_t>(w) * h, false);
+  for (const auto& c : reachable) is_reachable[static_cast<size_t>(c.y() - min_y) * w + (c.x() - min_x)] = true;
+  cv::Mat image(h, w, CV_8UC3);
+  for (int iy = min_y; iy <= max_y; ++iy)
+    for (int ix = min_x; ix <= max_x; ++ix) {
+      const Eigen::Vector2i cell(ix, iy);
+      const Eigen::Vector2d p = world.CellCenter(cell);
+      const int v = GridValueAtWorldPoint(grid, map_origin, p);
+      const bool free = v >= 0 && v <= kFreeAtMost, occupied = v >= kOccupiedAtLeast;
+      cv::Vec3b colour;  // BGR
+      if (is_reachable[static_cast<size_t>(iy - min_y) * w + (ix - min_x)])
+        colour = free ? cv::Vec3b(255, 255, 255) : v < 0 ? cv::Vec3b(0, 150, 255)
+                 : occupied                            ? cv::Vec3b(40, 40, 220)
+                                                       : cv::Vec3b(0, 215, 255);
+      else if (world.IsWall(cell))
+        colour = free && !WorldHasNear(world, p, true, tolerance_m) ? cv::Vec3b(220, 120, 0)
+                 : occupied                                           ? cv::Vec3b(0, 0, 0)
+                                                                      : cv::Vec3b(150, 150, 150);
+      else
+        colour = occupied && !WorldHasNear(world, p, false, tolerance_m) ? cv::Vec3b(200, 0, 200) : cv::Vec3b(225, 225, 225);
+      image.at<cv::Vec3b>(max_y - iy, ix - min_x) = colour;  // first row = top (largest y)
+    }
+  const int zoom = std::max(1, 1000 / std::max(w, h));
+  cv::resize(image, image, {w * zoom, h * zoom}, 0, 0, cv::INTER_NEAREST);
+  cv::copyMakeBorder(image, image, 40, 0, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(255, 255, 255));
+  cv::putText(image, "reachable cells: white free, orange unknown, yellow uncertain, red occupied", {6, 16},
+              cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(image, "blue: free on a wall   magenta: occupied off walls   grey: walls (black: marked)", {6, 32},
+              cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  return image;
+}
+
 }  // namespace rslam::demo

@@ -1,7 +1,8 @@
 #pragma once
 // The files `rslam demo` leaves behind besides summary.json: the occupancy grid as a map_server
 // map (grid.pgm + grid.yaml), and two pictures: the experience map aligned over the ground-truth
-// path (as paper 000 fig. 10) and the occupancy grid with the robot's path.
+// path (as paper 000 fig. 10), the occupancy grid with the robot's path, and the grid judged against
+// the world cell by cell (where coverage and precision are lost).
 
 #include <opencv2/core.hpp>
 
@@ -11,6 +12,7 @@
 #include "rslam/msg/all_messages.h"
 #include "tools/demo/demo_monitor.h"
 #include "tools/eval/trajectory_alignment.h"
+#include "common/math/pose2d.h"
 #include "tools/sim/world_map.h"
 
 namespace rslam::demo {
@@ -26,5 +28,15 @@ cv::Mat RenderExperienceMap(const sim::WorldMap& world, std::span<const FramePos
 
 // The grid (map_server shades) cropped to its known part, with the map-frame path in red.
 cv::Mat RenderOccupancy(const msg::OccupancyGrid& grid, std::span<const FramePose> map_path);
+
+// The world's cells coloured by what the grid (placed in the world by `map_origin`, the map frame's
+// pose there) says of them, cropped to the reachable cells with a margin, as CompareGridWithWorld
+// counts them: reachable cells the grid marks free white, unknown orange, uncertain yellow,
+// occupied red; walls the grid marks free with no free world cell within `tolerance_m` blue;
+// other free cells the grid marks occupied with no wall within it magenta; walls grey (black where
+// the grid marks them occupied); other free cells light grey. One world cell is one or more
+// pixels (at most 1000 a side, under a 40-pixel legend). Empty reachable set: the whole world.
+cv::Mat RenderGridComparison(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable,
+                             const Pose2D& map_origin, const msg::OccupancyGrid& grid, double tolerance_m);
 
 }  // namespace rslam::demo

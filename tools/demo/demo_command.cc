@@ -59,7 +59,7 @@ void PrepareOutputDir(const fs::path& out) {
   for (const auto& [dir, ext] : {std::pair{out / "logs", ".log"}, std::pair{out / "state", ".pb"}})
     for (const auto& entry : fs::directory_iterator(dir))
       if (entry.is_regular_file() && entry.path().extension() == ext) fs::remove(entry.path());
-  for (const char* name : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid.pgm",
+  for (const char* name : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid_errors.png", "grid.pgm",
                            "grid.yaml", "recording.mcap", "trajectories.csv"}) {
     std::error_code ignored;
     fs::remove(out / name, ignored);
@@ -315,8 +315,10 @@ int RunDemo(const DemoOptions& options) {
                               : grid_at_start;
     WriteMapServerGrid(*seen.grid, out / "grid");
     cv::imwrite((out / "occupancy.png").string(), RenderOccupancy(*seen.grid, seen.experience_poses));
+    cv::imwrite((out / "grid_errors.png").string(),
+                RenderGridComparison(world, reachable, map_to_world.value_or(map_origin), *seen.grid, world.resolution()));
   } else {
-    notes.push_back("no occupancy grid was received: no coverage, precision, grid files or occupancy.png");
+    notes.push_back("no occupancy grid was received: no coverage, precision, grid files, occupancy.png or grid_errors.png");
   }
   const std::vector<msg::ExperienceLink> no_links;
   const LoopClosureCheck loops =
@@ -349,6 +351,14 @@ int RunDemo(const DemoOptions& options) {
   summary["links"] = loops.links;
   summary["loop_closures"] = loops.loop_closures;
   summary["loop_closure_precision"] = OrNull(loops.precision);
+  // Each wrong one with the frame its newer end was first current (about when it was made).
+  summary["wrong_loop_closures"] = nlohmann::json::array();
+  for (const WrongLoopClosure& w : loops.wrong) {
+    const auto first = seen.experience_first_frame.find(std::max(w.from_id, w.to_id));
+    summary["wrong_loop_closures"].push_back(
+        {{"from_id", w.from_id}, {"to_id", w.to_id}, {"distance_m", w.distance_m},
+         {"frame", first != seen.experience_first_frame.end() ? nlohmann::json(first->second) : nlohmann::json()}});
+  }
   summary["ate_m"] = OrNull(ate_of(ate));
   summary["ate_odometry_m"] = OrNull(ate_of(ate_odometry));
   summary["live_path"] = {{"ate_m", OrNull(ate_of(ate_live))}, {"ate_odometry_m", OrNull(ate_of(ate_odometry_all))},
@@ -422,7 +432,8 @@ int RunDemo(const DemoOptions& options) {
          << Percent(grid_at_start ? std::optional(grid_at_start->coverage) : std::nullopt) << " and "
          << Percent(grid_at_start ? std::optional(grid_at_start->precision) : std::nullopt) << ".\n";
   for (const auto& n : notes) report << "note: " << n << "\n";
-  report << "\nfiles: summary.json, report.txt, experience_map.png, occupancy.png, grid.pgm, grid.yaml, trajectories.csv"
+  report << "\nfiles: summary.json, report.txt, experience_map.png, occupancy.png, grid_errors.png, grid.pgm, grid.yaml, "
+            "trajectories.csv"
          << (record ? ", recording.mcap" : "") << ", logs/, state/\n";
   std::ofstream(out / "report.txt") << report.str();
   std::cout << "\n" << report.str();

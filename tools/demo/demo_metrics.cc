@@ -18,24 +18,26 @@ Pose2D MapOrigin(const Pose2D& start, double initial_facing_rad) {
 
 Pose2D MapToWorld(const Pose2D& origin, double x, double y) { return Compose(origin, {x, y, 0.0}); }
 
-namespace {
-
-// World point to the map frame.
-Eigen::Vector2d WorldToMap(const Pose2D& origin, const Eigen::Vector2d& p) {
-  const Pose2D m = Between(origin, {p.x(), p.y(), 0.0});
-  return {m.x, m.y};
-}
-
-// The grid value at a map-frame point, or -1 outside the grid.
-int GridValueAt(const msg::OccupancyGrid& grid, const Eigen::Vector2d& p) {
-  const double gx = (p.x() - grid.origin_x_m) / grid.resolution_m;
-  const double gy = (p.y() - grid.origin_y_m) / grid.resolution_m;
+int GridValueAtWorldPoint(const msg::OccupancyGrid& grid, const Pose2D& map_origin, const Eigen::Vector2d& p) {
+  const Pose2D m = Between(map_origin, {p.x(), p.y(), 0.0});
+  const double gx = (m.x - grid.origin_x_m) / grid.resolution_m;
+  const double gy = (m.y - grid.origin_y_m) / grid.resolution_m;
   if (!(gx >= 0 && gy >= 0 && gx < grid.width && gy < grid.height)) return -1;
   const size_t i = static_cast<size_t>(gy) * grid.width + static_cast<size_t>(gx);
   return i < grid.cells.size() ? grid.cells[i] : -1;
 }
 
-}  // namespace
+bool WorldHasNear(const sim::WorldMap& world, const Eigen::Vector2d& p, bool free, double tolerance_m) {
+  const int reach = static_cast<int>(std::ceil(tolerance_m / world.resolution()));
+  const Eigen::Vector2i centre = world.WorldToCell(p);
+  for (int dy = -reach; dy <= reach; ++dy)
+    for (int dx = -reach; dx <= reach; ++dx) {
+      const Eigen::Vector2i c = centre + Eigen::Vector2i(dx, dy);
+      if ((world.CellCenter(c) - p).norm() > tolerance_m + 0.5 * world.resolution() && (dx != 0 || dy != 0)) continue;
+      if (free ? world.Classify(c) == sim::CellClass::kFree : world.IsWall(c)) return true;
+    }
+  return false;
+}
 
 std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, const Pose2D& start,
                                                 double robot_radius_m) {
@@ -58,7 +60,7 @@ GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const 
   GridComparison out;
   out.reachable_cells = reachable.size();
   for (const auto& cell : reachable) {
-    const int v = GridValueAt(grid, WorldToMap(map_origin, world.CellCenter(cell)));
+    const int v = GridValueAtWorldPoint(grid, map_origin, world.CellCenter(cell));
     if (v < 0)
       ++out.missed_unknown_cells;
     else if (v <= kFreeAtMost)
@@ -70,7 +72,6 @@ GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const 
   }
   out.coverage = reachable.empty() ? 0.0 : static_cast<double>(out.covered_cells) / reachable.size();
 
-  const int reach = static_cast<int>(std::ceil(tolerance_m / world.resolution()));
   for (uint32_t gy = 0; gy < grid.height; ++gy) {
     for (uint32_t gx = 0; gx < grid.width; ++gx) {
       const int v = grid.cells[static_cast<size_t>(gy) * grid.width + gx];
@@ -79,17 +80,8 @@ GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const 
       if (!free && !occupied) continue;
       ++out.marked_cells;
       const Pose2D w = MapToWorld(map_origin, grid.origin_x_m + (gx + 0.5) * grid.resolution_m,
-                                       grid.origin_y_m + (gy + 0.5) * grid.resolution_m);
-      const Eigen::Vector2i centre = world.WorldToCell({w.x, w.y});
-      bool agrees = false;
-      for (int dy = -reach; dy <= reach && !agrees; ++dy)
-        for (int dx = -reach; dx <= reach && !agrees; ++dx) {
-          const Eigen::Vector2i c = centre + Eigen::Vector2i(dx, dy);
-          if ((world.CellCenter(c) - Eigen::Vector2d(w.x, w.y)).norm() > tolerance_m + 0.5 * world.resolution() &&
-              (dx != 0 || dy != 0))
-            continue;
-          agrees = free ? world.Classify(c) == sim::CellClass::kFree : world.IsWall(c);
-        }
+                                  grid.origin_y_m + (gy + 0.5) * grid.resolution_m);
+      const bool agrees = WorldHasNear(world, {w.x, w.y}, free, tolerance_m);
       out.agreeing_cells += agrees;
       if (!agrees) ++(free ? out.wrong_free_cells : out.wrong_occupied_cells);
     }
@@ -139,7 +131,11 @@ LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
     const auto a = experience_truth.find(link.from_id), b = experience_truth.find(link.to_id);
     if (a == experience_truth.end() || b == experience_truth.end()) continue;
     ++out.verified;
-    out.correct += std::hypot(a->second.x - b->second.x, a->second.y - b->second.y) <= max_distance_m;
+    const double distance = std::hypot(a->second.x - b->second.x, a->second.y - b->second.y);
+    if (distance <= max_distance_m)
+      ++out.correct;
+    else
+      out.wrong.push_back({link.from_id, link.to_id, distance});
   }
   if (out.verified > 0) out.precision = static_cast<double>(out.correct) / out.verified;
   return out;

@@ -42,6 +42,14 @@ Pose2D MapOrigin(const Pose2D& start, double initial_facing_rad);
 // Map frame (whose pose in the world is `origin`) to world frame.
 Pose2D MapToWorld(const Pose2D& origin, double x, double y);
 
+// The grid's value (0-100, -1 unknown) at a world point, the map frame's pose in the world being
+// `map_origin`; -1 outside the grid.
+int GridValueAtWorldPoint(const msg::OccupancyGrid& grid, const Pose2D& map_origin, const Eigen::Vector2d& p);
+
+// Whether the world has a free cell (`free`) or a wall (not `free`) within tolerance_m of p (p's own
+// cell always counts): how a grid cell marked free or occupied at p is judged.
+bool WorldHasNear(const sim::WorldMap& world, const Eigen::Vector2d& p, bool free, double tolerance_m);
+
 struct GridComparison {
   double coverage = 0.0;
   double precision = 0.0;
@@ -69,12 +77,19 @@ std::vector<Eigen::Vector2i> ReachableFootprint(const sim::WorldMap& world, cons
 GridComparison CompareGridWithWorld(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable,
                                     const Pose2D& map_origin, const msg::OccupancyGrid& grid, double tolerance_m);
 
+struct WrongLoopClosure {
+  uint32_t from_id = 0;
+  uint32_t to_id = 0;
+  double distance_m = 0.0;  // between their ground-truth poses
+};
+
 struct LoopClosureCheck {
   uint32_t links = 0;
   uint32_t loop_closures = 0;
   uint32_t verified = 0;                // both ends have a ground-truth pose
   uint32_t correct = 0;                 // ... within the distance
   std::optional<double> precision;      // correct / verified; none without loop closures
+  std::vector<WrongLoopClosure> wrong;  // the verified ones farther apart than the distance
 };
 
 // Ground truth of each experience: the true pose at the frame it was first current.

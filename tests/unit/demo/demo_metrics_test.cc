@@ -1,8 +1,9 @@
 // The demo's figures of merit (tools/demo/demo_metrics.h): the grid against the world (coverage,
-// precision and where each is lost), placing a map in the world, and the final map's trajectory
-// error.
+// precision and where each is lost, and grid_errors.png that shows it), placing a map in the world,
+// and the final map's trajectory error.
 
 #include "tools/demo/demo_metrics.h"
+#include "tools/demo/demo_artifacts.h"
 
 #include <gtest/gtest.h>
 
@@ -80,6 +81,33 @@ TEST(DemoMetricsTest, CompareGridWithWorldCountsWhereCoverageAndPrecisionAreLost
   }
 }
 
+TEST(DemoMetricsTest, GridComparisonPictureColoursEachCellAsTheCountsJudgeIt) {
+  const sim::WorldMap world = SquareRoom();
+  const std::vector<Eigen::Vector2i> reachable = ReachableFootprint(world, {0.55, 0.55, 0.0}, 0.0);
+  const std::map<std::pair<int, int>, int8_t> changed = {
+      {{3, 3}, -1}, {{6, 6}, 50}, {{5, 5}, 100}, {{0, 6}, 0}, {{1, 1}, 0}, {{11, 4}, -1}};
+  const Eigen::Vector2d origin(0.6, 0.6);
+  const cv::Mat image = RenderGridComparison(world, reachable, {origin.x(), origin.y(), 0.0},
+                                             RoomGrid(world, origin, changed), world.resolution());
+  // The reachable cells (2..9) and 1 m (10 cells) around them, each cell zoom pixels, under a
+  // 40-pixel legend; the first row is the largest y.
+  const int cells = 8 + 2 * 10, zoom = 1000 / cells;
+  ASSERT_EQ(image.cols, cells * zoom);
+  ASSERT_EQ(image.rows, 40 + cells * zoom);
+  auto at = [&](int ix, int iy) {
+    return image.at<cv::Vec3b>(40 + (9 + 10 - iy) * zoom + zoom / 2, (ix - 2 + 10) * zoom + zoom / 2);
+  };
+  EXPECT_EQ(at(4, 4), cv::Vec3b(255, 255, 255));  // covered
+  EXPECT_EQ(at(3, 3), cv::Vec3b(0, 150, 255));    // unknown
+  EXPECT_EQ(at(6, 6), cv::Vec3b(0, 215, 255));    // uncertain
+  EXPECT_EQ(at(5, 5), cv::Vec3b(40, 40, 220));    // occupied
+  EXPECT_EQ(at(0, 6), cv::Vec3b(220, 120, 0));    // free on a wall, no floor within the tolerance
+  EXPECT_EQ(at(1, 1), cv::Vec3b(150, 150, 150));  // free on a wall beside the floor: agrees, a wall not marked
+  EXPECT_EQ(at(0, 0), cv::Vec3b(0, 0, 0));        // a wall the grid marks occupied
+  EXPECT_EQ(at(11, 4), cv::Vec3b(150, 150, 150)); // a wall the grid has not seen
+  EXPECT_EQ(at(-3, -3), cv::Vec3b(150, 150, 150)); // outside the world and the grid
+}
+
 TEST(DemoMetricsTest, CompareGridWithWorldCountsTheWorldOutsideTheGridAsUnknown) {
   const sim::WorldMap world = SquareRoom();
   const std::vector<Eigen::Vector2i> reachable = ReachableFootprint(world, {0.55, 0.55, 0.0}, 0.0);
@@ -125,6 +153,26 @@ TEST(DemoMetricsTest, FitMapToWorldIsTheLeastSquaresTurnOfANoisyMap) {
   EXPECT_NEAR(fit->theta, 0.0, 1e-9);
   EXPECT_NEAR(fit->x, 0.0, 1e-9);
   EXPECT_NEAR(fit->y, 0.0, 1e-9);
+}
+
+TEST(DemoMetricsTest, CheckLoopClosuresListsTheWrongOnes) {
+  const std::map<uint32_t, Pose2D> truth = {{1, {0, 0, 0}}, {2, {0.5, 0, 0}}, {3, {3, 4, 0}}};
+  std::vector<msg::ExperienceLink> links(4);
+  links[0].from_id = 2, links[0].to_id = 1, links[0].closes_loop = true;  // 0.5 m apart: right
+  links[1].from_id = 3, links[1].to_id = 1, links[1].closes_loop = true;  // 5 m apart: wrong
+  links[2].from_id = 3, links[2].to_id = 2, links[2].closes_loop = false; // odometry: not judged
+  links[3].from_id = 9, links[3].to_id = 1, links[3].closes_loop = true;  // no ground truth
+  const LoopClosureCheck c = CheckLoopClosures(links, truth, 1.0);
+  EXPECT_EQ(c.links, 4u);
+  EXPECT_EQ(c.loop_closures, 3u);
+  EXPECT_EQ(c.verified, 2u);
+  EXPECT_EQ(c.correct, 1u);
+  ASSERT_TRUE(c.precision.has_value());
+  EXPECT_DOUBLE_EQ(*c.precision, 0.5);
+  ASSERT_EQ(c.wrong.size(), 1u);
+  EXPECT_EQ(c.wrong[0].from_id, 3u);
+  EXPECT_EQ(c.wrong[0].to_id, 1u);
+  EXPECT_DOUBLE_EQ(c.wrong[0].distance_m, 5.0);
 }
 
 TEST(DemoMetricsTest, FitMapToWorldNeedsTwoExperiencesWithGroundTruth) {

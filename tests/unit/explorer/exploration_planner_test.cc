@@ -546,6 +546,57 @@ TEST(ExplorationPlannerTest, SavedStateKeepsSetAsideGoalsAcrossARestart) {
   EXPECT_EQ(restarted.set_aside_goals().size(), 1u);  // nothing half-loaded
 }
 
+TEST(ExplorationPlannerTest, ReturnsOnceToWhereExplorationBeganBeforeCallingItComplete) {
+  ExplorerConfig config = Config();
+  config.pirouette_at_goal = false;
+  config.return_to_start = true;
+  TestGrid grid(40, 40, 0);
+  grid.Set(30, 30, -1);
+  const Pose2D start{0.25, 0.25, 0.0}, far{1.5, 1.5, 0.0};
+  ExplorationPlanner planner(config);
+  ASSERT_FALSE(planner.PlanFrom(grid.View(), start).complete);
+  grid.Set(30, 30, 0);  // all seen: nothing left to explore
+
+  ExplorationPlanner without(Config());
+  without.LoadProto(planner.ToProto());
+  EXPECT_TRUE(without.PlanFrom(grid.View(), far).complete);
+
+  const Plan back = planner.PlanFrom(grid.View(), far);
+  ASSERT_FALSE(back.complete) << back.reason;
+  EXPECT_NE(back.reason.find("where exploration began"), std::string::npos) << back.reason;
+  ASSERT_TRUE(back.has_target);
+  EXPECT_LT(std::hypot(back.target.x - start.x, back.target.y - start.y), 0.15);  // the cell next to it
+  ASSERT_GE(back.commands.size(), 2u);
+  EXPECT_EQ(back.commands.front().kind, Kind::kRotate);
+  EXPECT_EQ(back.commands.back().kind, Kind::kPirouette);  // a look all round there
+  EXPECT_EQ(back.commands.back().steps, config.pirouette_steps);
+  // Done once the robot has looked all round there, also after a restart.
+  ExplorationPlanner restarted(config);
+  restarted.LoadProto(planner.ToProto());
+  planner.RecordPirouette(back.target);
+  EXPECT_TRUE(planner.PlanFrom(grid.View(), back.target).complete);
+  restarted.RecordPirouette(back.target);
+  EXPECT_TRUE(restarted.PlanFrom(grid.View(), far).complete);
+
+  // A return the grid interrupts (a blocked move, unknown space again) is planned again, three
+  // times in all; the look all round at the start of the run does not count.
+  ExplorationPlanner interrupted(config);
+  TestGrid unseen = grid;
+  unseen.Set(30, 30, -1);
+  ASSERT_FALSE(interrupted.PlanFrom(unseen.View(), start).complete);
+  interrupted.RecordPirouette(start);
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    const Plan again = interrupted.PlanFrom(grid.View(), far);
+    EXPECT_NE(again.reason.find("where exploration began"), std::string::npos) << again.reason;
+    interrupted.RecordPirouette(far);  // far from the start: not the look there
+  }
+  EXPECT_TRUE(interrupted.PlanFrom(grid.View(), far).complete);
+
+  proto::ExplorerState bad = planner.ToProto();
+  bad.mutable_start()->set_y(NAN);
+  EXPECT_THROW(restarted.LoadProto(bad), std::invalid_argument);
+}
+
 TEST(ExplorationPlannerTest, RejectsBadInput) {
   TestGrid grid(20, 20, 0);
   ExplorationPlanner planner(Config());
