@@ -55,10 +55,11 @@ struct ExplorerConfig {
   // unknown and exploration ends. Finer cells all the way are slower (more, smaller goals).
   int finishing_cell_factor = 0;
   int finishing_min_unknown_cells = 1;  // min_unknown_cells_for_goal on the finer grid
-  // When nothing is left to explore, drive back once to where exploration began (the pose of the
-  // first plan) and look all round there before calling exploration complete: the views of the
-  // run's first look close the loop of the whole run (active loop closing). Exploration goes on if
-  // the corrected grid then shows unknown space again.
+  // When nothing is left to explore, drive back to where exploration began (the pose of the first
+  // plan) and look all round there before calling exploration complete: the views of the run's
+  // first look close the loop of the whole run (active loop closing). Exploration goes on if the
+  // corrected grid then shows unknown space again; at most three plans back are made (a grid that
+  // changes on the way interrupts one). Off in the demo (tools/demo/MEASUREMENTS.md, session 41).
   bool return_to_start = false;
 
   template <class V>
@@ -96,7 +97,7 @@ struct ExplorerConfig {
     v("finishing_min_unknown_cells", finishing_min_unknown_cells,
       "unknown occupancy cells needed to make a cell of that finer grid a goal");
     v("return_to_start", return_to_start,
-      "when nothing is left to explore, drive back once to where exploration began and pirouette before completing");
+      "when nothing is left to explore, drive back to where exploration began and pirouette there before completing");
   }
   void Validate() const {
     Require(std::isfinite(robot_radius_m) && robot_radius_m >= 0 && robot_radius_m < 10,
