@@ -99,7 +99,7 @@ void ExplorationPlanner::RecordPirouette(const Pose2D& where) {
   if (!IsFinite(where)) throw std::invalid_argument("pirouette pose is not finite");
   last_pirouette_ = where;
   blocking_obstacles_.clear();  // the grid has just been looked at all round
-  if (return_attempts_ > 0 && std::hypot(where.x - start_->x, where.y - start_->y) <= kAtStartM)
+  if (return_attempts_ > 0 && start_ && std::hypot(where.x - start_->x, where.y - start_->y) <= kAtStartM)
     returned_to_start_ = true;
 }
 
