@@ -1,5 +1,9 @@
 #include "services/experience_map/experience_action_message.h"
 
+#include <stdexcept>
+
+#include "common/math/angle.h"
+
 namespace rslam::experience_map {
 namespace {
 
@@ -29,6 +33,29 @@ ExperienceAction FromActionMessage(const msg::PoseCellAction& m) {
   a.pc_th = m.pc_th;
   a.sequence = m.action_seq;
   return a;
+}
+
+AppliedAction ApplyActionMessage(ExperienceMap& map, const msg::PoseCellAction& m) {
+  AppliedAction applied;
+  map.Integrate(m.vtrans_mps, m.vrot_radps, m.dt_s);
+  if (m.wall_seen) {
+    const bool had_axes = map.manhattan_axes().has_value();
+    const uint64_t recaptures_before = map.heading_recaptures();
+    const double heading_before = map.RobotPose().theta;
+    map.HoldHeading(m.wall_direction_rad);
+    applied.axes_fixed = !had_axes && map.manhattan_axes().has_value();
+    if (map.heading_recaptures() != recaptures_before)
+      applied.heading_recaptured_rad = WrapAngle(heading_before - map.RobotPose().theta);
+  }
+  const uint64_t refused_before = map.refused_recognitions();
+  try {
+    map.Apply(FromActionMessage(m));
+    applied.recognition_refused = map.refused_recognitions() != refused_before;
+  } catch (const std::invalid_argument& e) {
+    applied.ids_refused = e.what();
+    map.Apply(ExperienceAction{});
+  }
+  return applied;
 }
 
 void FillMapMessage(const ExperienceMap& map, msg::ExperienceMap& out) {

@@ -16,7 +16,6 @@
 #include <thread>
 #include <utility>
 
-#include "common/math/angle.h"
 #include "common/persistence/state_file.h"
 #include "services/experience_map/experience_map.h"
 #include "services/experience_map/proto/experience_map_node_state.pb.h"
@@ -142,30 +141,20 @@ class ExperienceMapNode::Mapper {
   void Apply(const msg::PoseCellAction& m) {
     const uint32_t experiences_before = static_cast<uint32_t>(map_.experiences().size());
     const size_t links_before = map_.links().size();
-    map_.Integrate(m.vtrans_mps, m.vrot_radps, m.dt_s);  // validated on arrival
-    if (m.wall_seen) {
-      const bool had_axes = map_.manhattan_axes().has_value();
-      const uint64_t recaptures_before = map_.heading_recaptures();
-      const double heading_before = map_.RobotPose().theta;
-      map_.HoldHeading(m.wall_direction_rad);
-      if (!had_axes && map_.manhattan_axes())
-        spdlog::info("frame {}: the walls' axes are at {:.3f} rad (mod pi/2) in the map frame; holding the heading to them",
-                     m.header.frame_seq, *map_.manhattan_axes());
-      if (map_.heading_recaptures() != recaptures_before)
-        spdlog::info("frame {}: the walls agree the heading drifted {:.3f} rad past the hold's gate: taken out",
-                     m.header.frame_seq, WrapAngle(heading_before - map_.RobotPose().theta));
-    }
-    const uint64_t refused_before = map_.refused_recognitions();
-    try {
-      map_.Apply(FromActionMessage(m));
-      if (map_.refused_recognitions() != refused_before)
-        spdlog::info("frame {}: recognition of experience {} refused: it would move the robot too far from where the "
-                     "map has it (exp_recognition_max_jump_m)",
-                     m.header.frame_seq, m.experience_id);
-    } catch (const std::invalid_argument& e) {
-      context_.Reject("action_ids", "action " + std::to_string(m.action_seq) + " (" + msg::ToString(m.kind) + "): " + e.what());
-      map_.Apply(ExperienceAction{});  // the frame's correction budget is still spent
-    }
+    const AppliedAction applied = ApplyActionMessage(map_, m);  // validated on arrival
+    if (applied.axes_fixed)
+      spdlog::info("frame {}: the walls' axes are at {:.3f} rad (mod pi/2) in the map frame; holding the heading to them",
+                   m.header.frame_seq, *map_.manhattan_axes());
+    if (applied.heading_recaptured_rad)
+      spdlog::info("frame {}: the walls agree the heading drifted {:.3f} rad past the hold's gate: taken out",
+                   m.header.frame_seq, *applied.heading_recaptured_rad);
+    if (applied.recognition_refused)
+      spdlog::info("frame {}: recognition of experience {} refused: it would move the robot too far from where the "
+                   "map has it (exp_recognition_max_jump_m)",
+                   m.header.frame_seq, m.experience_id);
+    if (!applied.ids_refused.empty())
+      context_.Reject("action_ids",
+                      "action " + std::to_string(m.action_seq) + " (" + msg::ToString(m.kind) + "): " + applied.ids_refused);
     const bool structure_changed = map_.experiences().size() != experiences_before || map_.links().size() != links_before;
     if (structure_changed || m.kind == msg::ActionKind::ACTION_LINK || m.kind == msg::ActionKind::ACTION_SET ||
         map_.last_correction() > config_.map.exp_relax_tolerance) {

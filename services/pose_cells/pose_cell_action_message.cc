@@ -1,5 +1,7 @@
 #include "services/pose_cells/pose_cell_action_message.h"
 
+#include "services/templates/view_match_message.h"
+
 namespace rslam::pose_cells {
 namespace {
 
@@ -33,6 +35,30 @@ msg::PoseCellAction ToActionMessage(const Action& action, uint64_t action_seq, d
   out.vrot_radps = vrot_radps;
   out.dt_s = dt_s;
   return out;
+}
+
+FrameStep StepFrame(PoseCellNetwork& network, const msg::Header& header, const msg::Velocity* velocity, double vtrans_mps,
+                    double vrot_radps, double dt_s, const msg::ViewTemplate* view, uint64_t action_seq,
+                    FloorBoundary& scratch) {
+  // The boundary matters only to the checks and the offsets: without them nothing is converted.
+  const FloorBoundary* seen = nullptr;
+  const PoseCellConfig& config = network.config();
+  if ((config.exp_boundary_check || config.exp_boundary_offset || config.exp_submap_offset) && velocity &&
+      velocity->boundary_measured) {
+    scratch.clear();
+    for (const msg::FloorPoint& p : velocity->boundary) scratch.emplace_back(p.x_m, p.y_m);
+    seen = &scratch;
+  }
+  FrameStep step;
+  step.action = view ? network.ProcessFrame(vtrans_mps, vrot_radps, dt_s, templates::FromViewMessage(*view), seen)
+                     : network.ProcessFrameWithoutView(vtrans_mps, vrot_radps, dt_s, seen);
+  step.message = ToActionMessage(step.action, action_seq, vtrans_mps, vrot_radps, dt_s);
+  step.message.header = header;
+  if (velocity && velocity->wall_seen) {  // for the experience map (exp_manhattan)
+    step.message.wall_seen = true;
+    step.message.wall_direction_rad = velocity->wall_direction_rad;
+  }
+  return step;
 }
 
 }  // namespace rslam::pose_cells

@@ -1,11 +1,13 @@
 #pragma once
 // A pose-cell action as it travels on pose_cells/action (one message per frame, carrying the
-// frame's odometry), built here for both the service and `rslam run`, so the two never drift.
+// frame's odometry), built here for the service, `rslam run` and `rslam eval map`, so they never
+// drift.
 
 #include <cstdint>
 
 #include "rslam/msg/all_messages.h"
 #include "services/pose_cells/pose_cell_action.h"
+#include "services/pose_cells/pose_cell_network.h"
 
 namespace rslam::pose_cells {
 
@@ -13,5 +15,19 @@ namespace rslam::pose_cells {
 // frame's message; the pose-cell position travels as float.
 msg::PoseCellAction ToActionMessage(const Action& action, uint64_t action_seq, double vtrans_mps, double vrot_radps,
                                     double dt_s);
+
+// One joined frame through the network as the service processes it: the velocity's floor boundary
+// goes in when the network uses boundaries, and the action message carries the frame's header,
+// the odometry it integrated (vtrans, vrot, dt: the velocity's, or the caller's stand-in when the
+// frame's velocity never came) and the velocity's wall direction. velocity or view may be null (that
+// side of the frame never came). scratch is reused between calls. Throws std::invalid_argument as
+// PoseCellNetwork::ProcessFrame (network unchanged).
+struct FrameStep {
+  Action action;
+  msg::PoseCellAction message;
+};
+FrameStep StepFrame(PoseCellNetwork& network, const msg::Header& header, const msg::Velocity* velocity, double vtrans_mps,
+                    double vrot_radps, double dt_s, const msg::ViewTemplate* view, uint64_t action_seq,
+                    FloorBoundary& scratch);
 
 }  // namespace rslam::pose_cells

@@ -18,7 +18,6 @@
 #include "services/pose_cells/pose_cell_network.h"
 #include "services/pose_cells/proto/pose_cells_node_state.pb.h"
 #include "services/pose_cells/velocity_view_joiner.h"
-#include "services/templates/view_match_message.h"
 
 namespace rslam::pose_cells {
 
@@ -180,33 +179,19 @@ class PoseCellsNode::Processor {
     }
     if (bridge_pending_) BridgeMissedFrames(frame.frame_seq, header.stamp_ns, dt);
     if (relocalise_frames_left_ > 0) Relocalise(frame.frame_seq, view);
-    // The boundary matters only to the check and the offsets: without them nothing is converted or kept.
-    const FloorBoundary* seen = nullptr;
-    const PoseCellConfig& net = config_.network;
-    if ((net.exp_boundary_check || net.exp_boundary_offset || net.exp_submap_offset) && frame.velocity &&
-        frame.velocity->boundary_measured) {
-      boundary_.clear();
-      for (const msg::FloorPoint& p : frame.velocity->boundary) boundary_.emplace_back(p.x_m, p.y_m);
-      seen = &boundary_;
-    }
-    Action action;
+    FrameStep step;
     try {
-      action = view ? network_.ProcessFrame(vtrans, vrot, dt, templates::FromViewMessage(*view), seen)
-                    : network_.ProcessFrameWithoutView(vtrans, vrot, dt, seen);
+      step = StepFrame(network_, header, frame.velocity ? &*frame.velocity : nullptr, vtrans, vrot, dt, view,
+                       next_action_seq_, boundary_);
     } catch (const std::invalid_argument& e) {
       context_.Reject("frame", e.what());
       return;
     }
-    if (action.refused_link_to != kNoExperience) {
+    ++next_action_seq_;
+    if (step.action.refused_link_to != kNoExperience) {
       ++refused_links_;
       spdlog::debug("frame {}: link to experience {} refused by the floor boundaries ({} so far)", header.frame_seq,
-                    action.refused_link_to, refused_links_);
-    }
-    msg::PoseCellAction out = ToActionMessage(action, next_action_seq_++, vtrans, vrot, dt);
-    out.header = header;
-    if (frame.velocity && frame.velocity->wall_seen) {  // for the experience map (exp_manhattan)
-      out.wall_seen = true;
-      out.wall_direction_rad = frame.velocity->wall_direction_rad;
+                    step.action.refused_link_to, refused_links_);
     }
     if (frame.velocity) mean_vtrans_mps_ += 0.1 * (vtrans - mean_vtrans_mps_);
     has_last_frame_ = true;
@@ -214,7 +199,7 @@ class PoseCellsNode::Processor {
     last_stamp_ns_ = header.stamp_ns;
     dirty_ = true;
     context_.SetLastFrame(header.frame_seq, header.stamp_ns);
-    action_pub_->Publish(out);
+    action_pub_->Publish(step.message);
   }
 
   // After a restart from the saved state: the robot kept moving through the frames this service

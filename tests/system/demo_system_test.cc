@@ -124,7 +124,22 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   ASSERT_TRUE(summary["live_path"]["ate_odometry_m"].is_number());
   EXPECT_GT(summary["wall_s"].get<double>(), 0.0);
   if (!summary["recording"].is_null()) {
-    EXPECT_TRUE(fs::exists(summary["recording"].get<std::string>()));
+    const std::string recording = summary["recording"].get<std::string>();
+    ASSERT_TRUE(fs::exists(recording));
+    // The recording builds the run's map again through the services' libraries (`rslam eval map`):
+    // the pose cells give back every recorded action, and the map is the one the services built (the
+    // last frame or two may have reached the recorder and not the map before the services stopped).
+    testing::ChildProcess::Options replay_options;
+    replay_options.log_file = (out / "replay-output.txt").string();
+    testing::ChildProcess replay(RSLAM_BINARY_DIR "/bin/rslam",
+                                 {"eval", "map", recording, "--json", "--out", (out / "replay").string()}, replay_options);
+    ASSERT_EQ(replay.WaitExit(120s), std::optional<int>(0)) << replay.Tail();
+    const nlohmann::json replayed = nlohmann::json::parse(std::ifstream(out / "replay" / "summary.json"));
+    EXPECT_GT(replayed["actions_compared"].get<int64_t>(), summary["frames"].get<int64_t>() - 10) << replayed.dump(2);
+    EXPECT_EQ(replayed["actions_differing"].get<int64_t>(), 0) << replayed.dump(2);
+    EXPECT_NEAR(replayed["experiences"].get<double>(), summary["experiences"].get<double>(), 2);
+    EXPECT_NEAR(replayed["ate_m"].get<double>(), summary["ate_m"].get<double>(), 0.01);
+    EXPECT_NEAR(replayed["coverage"].get<double>(), summary["coverage"].get<double>(), 0.02);
   }
   for (const auto& [name, process] : summary["processes"].items())
     EXPECT_FALSE(process["gave_up"].get<bool>()) << name << " gave up";

@@ -38,7 +38,6 @@ constexpr int kDefaultDomain = 17;
 // Started in this order (and stopped in reverse: the simulator first, the recorder last).
 const std::vector<std::string> kServices = {"camera",         "odometry",  "templates", "pose_cells",
                                             "experience_map", "occupancy", "explorer"};
-constexpr double kLoopClosureMaxDistanceM = 1.0;
 
 std::string ResolveDds(const std::string& flag) {
   if (!flag.empty()) return flag;
@@ -82,8 +81,6 @@ const char* StateName(std::optional<msg::ExplorationState> s) {
   }
   return "?";
 }
-
-nlohmann::json OrNull(std::optional<double> v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
 
 std::string Percent(std::optional<double> v) {
   if (!v) return "n/a";
@@ -303,95 +300,42 @@ int RunDemo(const DemoOptions& options) {
 
   // Results.
   const DemoObservations seen = monitor.Snapshot();
-  const auto experience_truth = ExperienceGroundTruth(seen);
-  // The grid judged where the map's shape puts it (a rigid fit of the experiences to their ground
-  // truth) and, stricter, where the start pose alone puts it (any turn of the whole map counts).
-  const std::optional<Pose2D> map_to_world =
-      seen.map ? FitMapToWorld(seen.map->experiences, experience_truth) : std::nullopt;
-  std::optional<GridComparison> grid_check, grid_at_start;
+  const RunFigures figures = JudgeRun(world, reachable, map_origin, seen);
+  const std::optional<GridComparison>& grid_check = figures.grid;
+  const std::optional<GridComparison>& grid_at_start = figures.grid_at_start;
   if (seen.grid) {
-    grid_at_start = CompareGridWithWorld(world, reachable, map_origin, *seen.grid, world.resolution());
-    grid_check = map_to_world ? CompareGridWithWorld(world, reachable, *map_to_world, *seen.grid, world.resolution())
-                              : grid_at_start;
     WriteMapServerGrid(*seen.grid, out / "grid");
     cv::imwrite((out / "occupancy.png").string(), RenderOccupancy(*seen.grid, seen.experience_poses));
     cv::imwrite((out / "grid_errors.png").string(),
-                RenderGridComparison(world, reachable, map_to_world.value_or(map_origin), *seen.grid, world.resolution()));
+                RenderGridComparison(world, reachable, figures.map_to_world.value_or(map_origin), *seen.grid,
+                                     world.resolution()));
   } else {
     notes.push_back("no occupancy grid was received: no coverage, precision, grid files, occupancy.png or grid_errors.png");
   }
-  const std::vector<msg::ExperienceLink> no_links;
-  const LoopClosureCheck loops =
-      CheckLoopClosures(seen.map ? seen.map->links : no_links, experience_truth, kLoopClosureMaxDistanceM);
-  // ATE of the final map (the experiences where the map ends up, at the frames they were made) and
-  // of the odometry at the same frames; and of the live path and the odometry at every frame.
-  const auto dead_reckoning = DeadReckon(seen.odometry);
-  const auto map_trajectory = seen.map ? ExperienceMapTrajectory(*seen.map, seen) : std::vector<FramePose>{};
-  const auto ate = TrajectoryErrorAgainstTruth(map_trajectory, seen.ground_truth);
-  const auto ate_odometry = TrajectoryErrorAgainstTruth(AtFrames(dead_reckoning, map_trajectory), seen.ground_truth);
-  const auto ate_live = TrajectoryErrorAgainstTruth(seen.experience_poses, seen.ground_truth);
-  const auto ate_odometry_all = TrajectoryErrorAgainstTruth(dead_reckoning, seen.ground_truth);
+  const LoopClosureCheck& loops = figures.loops;
   auto ate_of = [](const std::optional<eval::TrajectoryError>& e) {
     return e ? std::optional(e->ate_m) : std::nullopt;
   };
   cv::imwrite((out / "experience_map.png").string(),
-              RenderExperienceMap(world, seen.ground_truth, seen.map ? &*seen.map : nullptr, ate ? &*ate : nullptr));
-  WriteTrajectoriesCsv(seen, dead_reckoning, out / "trajectories.csv");
+              RenderExperienceMap(world, seen.ground_truth, seen.map ? &*seen.map : nullptr,
+                                  figures.ate ? &*figures.ate : nullptr));
+  WriteTrajectoriesCsv(seen, figures.dead_reckoning, out / "trajectories.csv");
   const uint64_t frames = seen.ground_truth.size();
   const uint32_t experiences = seen.map ? static_cast<uint32_t>(seen.map->experiences.size()) : seen.experience_count;
+  const auto& ate = figures.ate;
+  const auto& ate_odometry = figures.ate_odometry;
+  const auto& ate_live = figures.ate_live;
+  const auto& ate_odometry_all = figures.ate_odometry_all;
 
-  nlohmann::json summary;
+  nlohmann::json summary = FiguresJson(figures, seen, map_origin, world.resolution());
   summary["complete"] = complete;
   summary["end_reason"] = end_reason;
-  summary["coverage"] = OrNull(grid_check ? std::optional(grid_check->coverage) : std::nullopt);
-  summary["map_precision"] = OrNull(grid_check ? std::optional(grid_check->precision) : std::nullopt);
-  summary["frames"] = frames;
-  summary["templates"] = seen.template_count;
-  summary["experiences"] = experiences;
-  summary["links"] = loops.links;
-  summary["loop_closures"] = loops.loop_closures;
-  summary["loop_closure_precision"] = OrNull(loops.precision);
-  // Each wrong one with the frame its newer end was first current (about when it was made).
-  summary["wrong_loop_closures"] = nlohmann::json::array();
-  for (const WrongLoopClosure& w : loops.wrong) {
-    const auto first = seen.experience_first_frame.find(std::max(w.from_id, w.to_id));
-    summary["wrong_loop_closures"].push_back(
-        {{"from_id", w.from_id}, {"to_id", w.to_id}, {"distance_m", w.distance_m},
-         {"frame", first != seen.experience_first_frame.end() ? nlohmann::json(first->second) : nlohmann::json()}});
-  }
-  summary["ate_m"] = OrNull(ate_of(ate));
-  summary["ate_odometry_m"] = OrNull(ate_of(ate_odometry));
-  summary["live_path"] = {{"ate_m", OrNull(ate_of(ate_live))}, {"ate_odometry_m", OrNull(ate_of(ate_odometry_all))},
-                          {"frames", ate_live ? ate_live->pairs : 0}};
   summary["wall_s"] = wall_s;
   summary["dds"] = dds;
   summary["domain"] = domain;
   summary["world"] = world_path;
   summary["start_pose"] = {start.x, start.y, start.theta};
   summary["odometry"] = options.wheel_odometry ? "wheel" : "visual";
-  if (grid_check)
-    summary["grid"] = {{"reachable_cells", grid_check->reachable_cells},
-                       {"covered_cells", grid_check->covered_cells},
-                       {"marked_cells", grid_check->marked_cells},
-                       {"agreeing_cells", grid_check->agreeing_cells},
-                       {"missed_cells", {{"unknown", grid_check->missed_unknown_cells},
-                                         {"uncertain", grid_check->missed_uncertain_cells},
-                                         {"occupied", grid_check->missed_occupied_cells}}},
-                       {"wrong_cells", {{"free", grid_check->wrong_free_cells},
-                                        {"occupied", grid_check->wrong_occupied_cells}}},
-                       {"tolerance_m", world.resolution()},
-                       {"placed_by", map_to_world ? "rigid fit of the experiences to ground truth" : "start pose"},
-                       {"at_start_pose", {{"coverage", grid_at_start->coverage},
-                                          {"map_precision", grid_at_start->precision}}}};
-  // The map frame's pose in the world as the start pose and the map's initial facing put it (the
-  // placement of grid.at_start_pose), beside the one the rigid fit finds.
-  summary["map_origin"] = {{"x_m", map_origin.x}, {"y_m", map_origin.y}, {"theta_rad", map_origin.theta}};
-  if (map_to_world)
-    summary["grid_placement"] = {{"x_m", map_to_world->x}, {"y_m", map_to_world->y},
-                                 {"theta_rad", map_to_world->theta}};
-  if (ate)
-    summary["alignment"] = {{"scale", ate->scale}, {"rotation_rad", ate->rotation_rad}, {"pairs", ate->pairs}};
-  if (ate_odometry) summary["odometry_alignment"] = {{"scale", ate_odometry->scale}, {"pairs", ate_odometry->pairs}};
   nlohmann::json processes = nlohmann::json::object();
   for (const auto& s : statuses_before_stop)
     processes[s.name] = {{"restarts", s.restarts}, {"running_at_end", s.running}, {"gave_up", s.gave_up},

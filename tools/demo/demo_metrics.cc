@@ -203,4 +203,79 @@ std::optional<eval::TrajectoryError> TrajectoryErrorAgainstTruth(std::span<const
   }
 }
 
+RunFigures JudgeRun(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable, const Pose2D& map_origin,
+                    const DemoObservations& seen) {
+  RunFigures f;
+  const auto experience_truth = ExperienceGroundTruth(seen);
+  // The grid judged where the map's shape puts it (a rigid fit of the experiences to their ground
+  // truth) and, stricter, where the start pose alone puts it (any turn of the whole map counts).
+  if (seen.map) f.map_to_world = FitMapToWorld(seen.map->experiences, experience_truth);
+  if (seen.grid) {
+    f.grid_at_start = CompareGridWithWorld(world, reachable, map_origin, *seen.grid, world.resolution());
+    f.grid = f.map_to_world ? CompareGridWithWorld(world, reachable, *f.map_to_world, *seen.grid, world.resolution())
+                            : f.grid_at_start;
+  }
+  const std::vector<msg::ExperienceLink> no_links;
+  f.loops = CheckLoopClosures(seen.map ? seen.map->links : no_links, experience_truth, kLoopClosureMaxDistanceM);
+  f.dead_reckoning = DeadReckon(seen.odometry);
+  if (seen.map) f.map_trajectory = ExperienceMapTrajectory(*seen.map, seen);
+  f.ate = TrajectoryErrorAgainstTruth(f.map_trajectory, seen.ground_truth);
+  f.ate_odometry = TrajectoryErrorAgainstTruth(AtFrames(f.dead_reckoning, f.map_trajectory), seen.ground_truth);
+  f.ate_live = TrajectoryErrorAgainstTruth(seen.experience_poses, seen.ground_truth);
+  f.ate_odometry_all = TrajectoryErrorAgainstTruth(f.dead_reckoning, seen.ground_truth);
+  return f;
+}
+
+nlohmann::json FiguresJson(const RunFigures& f, const DemoObservations& seen, const Pose2D& map_origin,
+                           double tolerance_m) {
+  const auto or_null = [](const auto& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
+  const auto ate_of = [](const std::optional<eval::TrajectoryError>& e) {
+    return e ? nlohmann::json(e->ate_m) : nlohmann::json(nullptr);
+  };
+  nlohmann::json j;
+  j["coverage"] = f.grid ? nlohmann::json(f.grid->coverage) : nlohmann::json(nullptr);
+  j["map_precision"] = f.grid ? nlohmann::json(f.grid->precision) : nlohmann::json(nullptr);
+  j["frames"] = seen.ground_truth.size();
+  j["templates"] = seen.template_count;
+  j["experiences"] = seen.map ? static_cast<uint32_t>(seen.map->experiences.size()) : seen.experience_count;
+  j["links"] = f.loops.links;
+  j["loop_closures"] = f.loops.loop_closures;
+  j["loop_closure_precision"] = or_null(f.loops.precision);
+  // Each wrong one with the frame its newer end was first current (about when it was made).
+  j["wrong_loop_closures"] = nlohmann::json::array();
+  for (const WrongLoopClosure& w : f.loops.wrong) {
+    const auto first = seen.experience_first_frame.find(std::max(w.from_id, w.to_id));
+    j["wrong_loop_closures"].push_back(
+        {{"from_id", w.from_id}, {"to_id", w.to_id}, {"distance_m", w.distance_m},
+         {"frame", first != seen.experience_first_frame.end() ? nlohmann::json(first->second) : nlohmann::json()}});
+  }
+  j["ate_m"] = ate_of(f.ate);
+  j["ate_odometry_m"] = ate_of(f.ate_odometry);
+  j["live_path"] = {{"ate_m", ate_of(f.ate_live)}, {"ate_odometry_m", ate_of(f.ate_odometry_all)},
+                    {"frames", f.ate_live ? f.ate_live->pairs : 0}};
+  if (f.grid)
+    j["grid"] = {{"reachable_cells", f.grid->reachable_cells},
+                 {"covered_cells", f.grid->covered_cells},
+                 {"marked_cells", f.grid->marked_cells},
+                 {"agreeing_cells", f.grid->agreeing_cells},
+                 {"missed_cells", {{"unknown", f.grid->missed_unknown_cells},
+                                   {"uncertain", f.grid->missed_uncertain_cells},
+                                   {"occupied", f.grid->missed_occupied_cells}}},
+                 {"wrong_cells", {{"free", f.grid->wrong_free_cells}, {"occupied", f.grid->wrong_occupied_cells}}},
+                 {"tolerance_m", tolerance_m},
+                 {"placed_by", f.map_to_world ? "rigid fit of the experiences to ground truth" : "start pose"},
+                 {"at_start_pose", {{"coverage", f.grid_at_start->coverage},
+                                    {"map_precision", f.grid_at_start->precision}}}};
+  // The map frame's pose in the world as the start pose and the map's initial facing put it (the
+  // placement of grid.at_start_pose), beside the one the rigid fit finds.
+  j["map_origin"] = {{"x_m", map_origin.x}, {"y_m", map_origin.y}, {"theta_rad", map_origin.theta}};
+  if (f.map_to_world)
+    j["grid_placement"] = {{"x_m", f.map_to_world->x}, {"y_m", f.map_to_world->y},
+                           {"theta_rad", f.map_to_world->theta}};
+  if (f.ate) j["alignment"] = {{"scale", f.ate->scale}, {"rotation_rad", f.ate->rotation_rad}, {"pairs", f.ate->pairs}};
+  if (f.ate_odometry)
+    j["odometry_alignment"] = {{"scale", f.ate_odometry->scale}, {"pairs", f.ate_odometry->pairs}};
+  return j;
+}
+
 }  // namespace rslam::demo

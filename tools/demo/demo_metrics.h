@@ -16,6 +16,8 @@
 // the map's initial facing (the demo's map origin: the pose of the map frame in the world). Pure
 // functions of their inputs.
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -29,6 +31,9 @@
 #include "tools/sim/world_map.h"
 
 namespace rslam::demo {
+
+// A loop closure is right when its two experiences were made this close in ground truth.
+inline constexpr double kLoopClosureMaxDistanceM = 1.0;
 
 // map_server thresholds on the 0-100 occupancy scale.
 inline constexpr int kFreeAtMost = 19;      // free_thresh 0.196
@@ -121,5 +126,26 @@ std::vector<FramePose> AtFrames(std::span<const FramePose> trajectory, std::span
 // two poses pair up or the estimate does not move.
 std::optional<eval::TrajectoryError> TrajectoryErrorAgainstTruth(std::span<const FramePose> estimate,
                                                                  std::span<const FramePose> truth);
+
+// Every figure of a run against the truth, as `rslam demo` and `rslam eval map` report them.
+struct RunFigures {
+  std::optional<Pose2D> map_to_world;           // FitMapToWorld of the final map
+  std::optional<GridComparison> grid;           // the final grid placed by that fit (else the start pose)
+  std::optional<GridComparison> grid_at_start;  // ... placed by the start pose (map_origin)
+  LoopClosureCheck loops;
+  std::vector<FramePose> dead_reckoning;        // the odometry over every frame
+  std::vector<FramePose> map_trajectory;        // ExperienceMapTrajectory of the final map
+  // ATE of the final map and of the odometry at its frames; of the live path and the odometry at
+  // every frame.
+  std::optional<eval::TrajectoryError> ate, ate_odometry, ate_live, ate_odometry_all;
+};
+RunFigures JudgeRun(const sim::WorldMap& world, std::span<const Eigen::Vector2i> reachable, const Pose2D& map_origin,
+                    const DemoObservations& seen);
+
+// summary.json's figures: coverage, map_precision, frames, templates, experiences, links,
+// loop_closures, loop_closure_precision, wrong_loop_closures, ate_m, ate_odometry_m, live_path,
+// grid, map_origin, grid_placement, alignment, odometry_alignment.
+nlohmann::json FiguresJson(const RunFigures& figures, const DemoObservations& seen, const Pose2D& map_origin,
+                           double tolerance_m);
 
 }  // namespace rslam::demo

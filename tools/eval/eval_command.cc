@@ -6,7 +6,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <fstream>
 #include <map>
+#include <numbers>
 #include <memory>
 #include <utility>
 #include <string>
@@ -16,13 +18,19 @@
 #include "common/config/config_loader.h"
 #include "common/bus/typed_cdr.h"
 #include "common/mcap/mcap_reader.h"
+#include "tools/demo/demo_artifacts.h"
+#include "tools/demo/demo_metrics.h"
 #include "tools/eval/image_folder.h"
+#include "tools/eval/map_replay.h"
+#include "tools/eval/recorded_run.h"
 #include "tools/eval/odometry_replay.h"
 #include "tools/eval/patch_normalised_sad.h"
 #include "tools/eval/template_difference_matrix.h"
 #include "tools/eval/trajectory_csv.h"
 #include "tools/eval/vpr_evaluation.h"
 #include "tools/sim/sim_node.h"
+
+#include <opencv2/imgcodecs.hpp>
 
 namespace rslam::eval {
 
@@ -51,6 +59,16 @@ struct TrajectoryCommandOptions {
   std::string truth_file;
   bool no_scale = false;
   double max_stamp_gap_ms = 10.0;
+  bool json = false;
+};
+
+struct MapCommandOptions {
+  std::string recording;
+  std::string config_file = RSLAM_EVAL_DEFAULT_DEMO_CONFIG;
+  std::vector<std::string> overrides;
+  std::string robot;
+  bool recorded_actions = false;
+  std::string out_dir;
   bool json = false;
 };
 
@@ -178,39 +196,19 @@ void RunTrajectory(const TrajectoryCommandOptions& options, std::ostream& out, s
   }
 }
 
-// The recording's frames (sim/ground_truth) with their recorded odometry/velocity, of one robot
-// (the first one seen, unless named).
-std::vector<ReplayedFrame> RecordedFrames(const std::string& path, std::string& robot) {
-  std::map<uint64_t, ReplayedFrame> frames;
-  std::map<std::pair<std::string, uint64_t>, msg::Velocity> velocities;  // by robot and frame
-  const mcap::McapReader reader(path);
-  reader.ForEachMessage({}, [&](const mcap::MessageView& m) {
-    const std::string& topic = m.channel->topic;
-    const bool truth = topic.ends_with("/sim/ground_truth"), velocity = topic.ends_with("/odometry/velocity");
-    if (!truth && !velocity) return;
-    const std::span<const uint8_t> cdr(reinterpret_cast<const uint8_t*>(m.data.data()), m.data.size());
-    if (truth) {
-      const auto t = bus::FromCdr<msg::GroundTruthPose>(cdr);
-      if (robot.empty()) robot = t.header.robot_id;
-      if (t.header.robot_id != robot) return;
-      ReplayedFrame& frame = frames[t.header.frame_seq];
-      frame.frame_seq = t.header.frame_seq;
-      frame.stamp_ns = t.header.stamp_ns;
-      frame.truth = {t.x_m, t.y_m, t.theta_rad};
-    } else {
-      auto v = bus::FromCdr<msg::Velocity>(cdr);
-      velocities[{v.header.robot_id, v.header.frame_seq}] = std::move(v);
-    }
-  });
+// The recording's frames with ground truth, with their recorded odometry/velocity.
+std::vector<ReplayedFrame> RecordedFrames(const RecordedRun& run) {
   std::vector<ReplayedFrame> out;
-  out.reserve(frames.size());
-  for (auto& [seq, frame] : frames) {
-    const auto v = velocities.find({robot, seq});
-    if (v != velocities.end()) {
-      frame.recorded_vtrans_mps = v->second.vtrans_mps;
-      frame.recorded_vrot_radps = v->second.vrot_radps;
+  for (const RecordedFrame& f : run.frames) {
+    if (!f.truth) continue;
+    ReplayedFrame& frame = out.emplace_back();
+    frame.frame_seq = f.frame_seq;
+    frame.stamp_ns = f.stamp_ns;
+    frame.truth = *f.truth;
+    if (f.velocity) {
+      frame.recorded_vtrans_mps = f.velocity->vtrans_mps;
+      frame.recorded_vrot_radps = f.velocity->vrot_radps;
     }
-    out.push_back(frame);
   }
   return out;
 }
@@ -223,8 +221,9 @@ void RunOdometry(const OdometryCommandOptions& options, std::ostream& out, std::
     LoadConfigSection(config, "sim", sim);
     odometry::OdometryNodeConfig odometry;
     LoadConfigSection(config, "odometry", odometry);
-    std::string robot = options.robot;
-    const std::vector<ReplayedFrame> frames = RecordedFrames(options.recording, robot);
+    const RecordedRun run = ReadRecordedRun(options.recording, options.robot);
+    const std::string& robot = run.robot;
+    const std::vector<ReplayedFrame> frames = RecordedFrames(run);
     if (frames.size() < 2) Fail(err, "odometry", options.recording + " holds fewer than two sim/ground_truth frames");
     const sim::WorldMap world = sim::WorldMap::LoadFromYaml(sim::ResolveWorldPath(sim.sim.world_yaml));
     const OdometryReplayResult r = ReplayOdometry(world, sim.sim, odometry, frames);
@@ -258,6 +257,73 @@ void RunOdometry(const OdometryCommandOptions& options, std::ostream& out, std::
     Fail(err, "odometry", "bad config " + options.config_file + ": " + e.what());
   } catch (const std::exception& e) {
     Fail(err, "odometry", e.what());
+  }
+}
+
+void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& err) {
+  try {
+    YAML::Node config = LoadYamlFile(options.config_file);
+    for (const std::string& assignment : options.overrides) ApplyOverride(config, assignment);
+    sim::SimNodeConfig sim;
+    LoadConfigSection(config, "sim", sim);
+    MapReplayConfig replay;
+    LoadConfigSection(config, "pose_cells", replay.pose_cells);
+    LoadConfigSection(config, "experience_map", replay.experience_map);
+    LoadConfigSection(config, "occupancy", replay.occupancy);
+    replay.recorded_actions = options.recorded_actions;
+    const RecordedRun run = ReadRecordedRun(options.recording, options.robot);
+    if (run.frames.empty()) Fail(err, "map", options.recording + " holds no frames of a robot");
+    const MapReplayResult r = ReplayMap(run, replay);
+
+    // Judged as `rslam demo` judges its run (tools/demo/demo_metrics.h).
+    const sim::WorldMap world = sim::WorldMap::LoadFromYaml(sim::ResolveWorldPath(sim.sim.world_yaml));
+    const Pose2D start = sim::StartPoseOf(sim, world);
+    const std::vector<Eigen::Vector2i> reachable =
+        demo::ReachableFootprint(world, start, sim.sim.motion.robot_radius_m);
+    const Pose2D map_origin =
+        demo::MapOrigin(start, replay.experience_map.map.exp_initial_em_deg * std::numbers::pi / 180);
+    const demo::RunFigures figures = demo::JudgeRun(world, reachable, map_origin, r.seen);
+    nlohmann::json json = demo::FiguresJson(figures, r.seen, map_origin, world.resolution());
+    json["robot"] = run.robot;
+    json["actions"] = options.recorded_actions ? "recorded" : "replayed";
+    json["actions_compared"] = r.actions_compared;
+    json["actions_differing"] = r.actions_differing;
+    json["profiles_kept"] = r.profiles_kept;
+    if (!options.out_dir.empty()) {
+      const std::filesystem::path dir(options.out_dir);
+      std::filesystem::create_directories(dir);
+      std::ofstream(dir / "summary.json") << json.dump(2) << "\n";
+      cv::imwrite((dir / "experience_map.png").string(),
+                  demo::RenderExperienceMap(world, r.seen.ground_truth, &*r.seen.map, figures.ate ? &*figures.ate : nullptr));
+      cv::imwrite((dir / "grid_errors.png").string(),
+                  demo::RenderGridComparison(world, reachable, figures.map_to_world.value_or(map_origin), *r.seen.grid,
+                                             world.resolution()));
+    }
+    if (options.json) {
+      out << json.dump() << "\n";
+      return;
+    }
+    const auto number = [](const nlohmann::json& v, const char* format) {
+      if (v.is_null()) return std::string("n/a");
+      char text[32];
+      std::snprintf(text, sizeof text, format, v.get<double>());
+      return std::string(text);
+    };
+    out << run.robot << ": " << json["frames"] << " frames, " << json["experiences"] << " experiences, "
+        << json["loop_closures"] << " loop closures (" << number(json["loop_closure_precision"], "%.3f")
+        << " right); coverage " << number(json["coverage"], "%.4f") << ", map precision "
+        << number(json["map_precision"], "%.4f") << ", ATE " << number(json["ate_m"], "%.3f") << " m (odometry "
+        << number(json["ate_odometry_m"], "%.3f") << " m); ";
+    if (options.recorded_actions)
+      out << "recorded actions applied\n";
+    else
+      out << r.actions_differing << " of " << r.actions_compared << " recorded actions differ\n";
+  } catch (const CLI::Error&) {
+    throw;
+  } catch (const ConfigError& e) {
+    Fail(err, "map", "bad config " + options.config_file + ": " + e.what());
+  } catch (const std::exception& e) {
+    Fail(err, "map", e.what());
   }
 }
 
@@ -323,6 +389,25 @@ void RegisterEvalCommand(CLI::App& rslam, std::ostream& out, std::ostream& err) 
   odometry->add_option("--robot", odometry_options->robot, "the robot to replay (default: the first recorded)");
   odometry->add_flag("--json", odometry_options->json, "Print the result as one JSON object");
   odometry->callback([odometry_options, &out, &err] { RunOdometry(*odometry_options, out, err); });
+
+  auto map_options = std::make_shared<MapCommandOptions>();
+  CLI::App* map = eval->add_subcommand(
+      "map", "A simulated run's map built again: its recorded odometry and views through the pose cells and the "
+             "experience map, its obstacle profiles into a grid, judged against the truth as rslam demo judges");
+  map->add_option("recording", map_options->recording, "MCAP recording of a run (rslam demo's recording.mcap)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  map->add_option("--config", map_options->config_file,
+                  "config with the run's sim, pose_cells, experience_map and occupancy sections (default: "
+                  "deploy/config/demo.yaml)")
+      ->check(CLI::ExistingFile);
+  map->add_option("--set", map_options->overrides, "override a config key (section.key=value), repeatable");
+  map->add_option("--robot", map_options->robot, "the robot to replay (default: the first recorded)");
+  map->add_flag("--recorded-actions", map_options->recorded_actions,
+                "apply the recorded pose_cells/action instead of running the pose cells again");
+  map->add_option("--out", map_options->out_dir, "also write summary.json, experience_map.png and grid_errors.png here");
+  map->add_flag("--json", map_options->json, "Print the result as one JSON object");
+  map->callback([map_options, &out, &err] { RunMap(*map_options, out, err); });
 }
 
 void RegisterEvalCommand(CLI::App& rslam) { RegisterEvalCommand(rslam, std::cout, std::cerr); }

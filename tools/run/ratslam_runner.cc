@@ -157,13 +157,9 @@ void RatSlamRunner::ApplyToMap(const pose_cells::Action& action, double vtrans, 
     ++refused_actions_;
     return;
   }
-  map_.Integrate(message.vtrans_mps, message.vrot_radps, message.dt_s);
   const size_t links_before = map_.links().size();
-  try {
-    map_.Apply(experience_map::FromActionMessage(message));
-  } catch (const std::invalid_argument&) {
+  if (!experience_map::ApplyActionMessage(map_, message).ids_refused.empty()) {
     ++refused_actions_;
-    map_.Apply(experience_map::ExperienceAction{});  // the frame's correction budget is still spent
     return;
   }
   if (message.kind == msg::ActionKind::ACTION_LINK) {

@@ -1,0 +1,222 @@
+// ReplayMap and `rslam eval map` on a recording written here: a robot driving a square twice in the
+// shipped world, its odometry and views (the second lap recognising the first) through the pose cells
+// as the service runs them, with obstacle profiles, written as `rslam record` writes a run. The demo
+// system test replays a real run's recording and checks the map against the demo's own summary.
+#include "tools/eval/map_replay.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "common/bus/typed_cdr.h"
+#include "common/config/config_loader.h"
+#include "common/mcap/mcap_writer.h"
+#include "services/pose_cells/pose_cell_action_message.h"
+#include "services/pose_cells/pose_cell_network.h"
+#include "tests/support/child_process.h"
+#include "tests/unit/eval/eval_test_files.h"
+#include "tools/eval/eval_command.h"
+#include "tools/sim/sim_node.h"
+#include "tools/sim/world_map.h"
+
+namespace rslam::eval {
+namespace {
+
+using testing::RunRslam;
+
+constexpr const char* kDemoConfig = RSLAM_SOURCE_DIR "/deploy/config/demo.yaml";
+constexpr double kDt = 0.1;
+constexpr int kSideFrames = 40;  // 1 m at 0.25 m/s
+constexpr int kTurnFrames = 4;   // a quarter turn
+
+class MapReplayTest : public ::testing::Test {
+ protected:
+  MapReplayTest() : demo_(LoadYamlFile(kDemoConfig)) {
+    LoadConfigSection(demo_, "pose_cells", config_.pose_cells);
+    LoadConfigSection(demo_, "experience_map", config_.experience_map);
+    LoadConfigSection(demo_, "occupancy", config_.occupancy);
+    sim::SimNodeConfig sim;
+    LoadConfigSection(demo_, "sim", sim);
+    const sim::WorldMap world = sim::WorldMap::LoadFromYaml(sim::ResolveWorldPath(sim.sim.world_yaml));
+    Record(sim::StartPoseOf(sim, world));
+  }
+
+  // Two laps of a 1-m square: the first lap's views are new templates, the second's match them.
+  void Record(Pose2D truth) {
+    run_.robot = "robot1";
+    pose_cells::PoseCellNetwork network(config_.pose_cells.network);
+    pose_cells::FloorBoundary scratch;
+    const int lap = 4 * (kSideFrames + kTurnFrames);
+    for (int i = 0; i < 2 * lap; ++i) {
+      RecordedFrame& f = run_.frames.emplace_back();
+      f.frame_seq = static_cast<uint64_t>(i);
+      f.stamp_ns = static_cast<int64_t>(i) * 100'000'000;
+      msg::Header header;
+      header.robot_id = run_.robot;
+      header.frame_seq = f.frame_seq;
+      header.stamp_ns = f.stamp_ns;
+      const bool turning = i % (kSideFrames + kTurnFrames) >= kSideFrames;
+      msg::Velocity v;
+      v.header = header;
+      v.dt_s = i == 0 ? 0.0 : kDt;
+      v.vtrans_mps = i == 0 || turning ? 0.0 : 0.25;
+      v.vrot_radps = i == 0 || !turning ? 0.0 : std::numbers::pi / 2 / (kTurnFrames * kDt);
+      truth = Compose(truth, {v.vtrans_mps * v.dt_s, 0.0, v.vrot_radps * v.dt_s});
+      f.truth = truth;
+      f.velocity = v;
+      msg::ViewTemplate view;
+      view.header = header;
+      const int place = i % lap;
+      view.template_id = static_cast<uint32_t>(place / 2);
+      view.is_new = i < lap && place % 2 == 0;
+      view.difference = view.is_new ? 0.0 : 0.01;
+      view.template_count = static_cast<uint32_t>(std::min(i, lap - 1) / 2 + 1);
+      f.view = view;
+      f.action = pose_cells::StepFrame(network, header, &v, v.vtrans_mps, v.vrot_radps, v.dt_s, &view,
+                                       static_cast<uint64_t>(i), scratch)
+                     .message;
+      msg::ObstacleProfile profile;  // floor seen free 1 m ahead, a wall at 1.2 m to the left
+      profile.header = header;
+      profile.bearing_min_rad = -0.5f;
+      profile.bearing_step_rad = 0.1f;
+      profile.max_range_m = 1.5f;
+      for (int b = 0; b < 11; ++b)
+        profile.bins.push_back({b < 10 ? msg::ProfileBinStatus::PROFILE_BIN_FREE : msg::ProfileBinStatus::PROFILE_BIN_OBSTACLE,
+                                b < 10 ? 1.0f : 1.2f, 0.35f});
+      f.profile = profile;
+    }
+  }
+
+  // The run as `rslam record` writes it: each message on /robot1/<topic>, in CDR.
+  std::string WriteRecording() const {
+    const std::string path = (dir_ / "run.mcap").string();
+    mcap::McapWriter writer;
+    writer.Open(path);
+    std::map<std::string, uint16_t> channels;
+    const auto write = [&](const std::string& topic, const std::string& type, const msg::Header& h, auto message) {
+      if (!channels.count(topic))
+        channels[topic] = writer.AddChannel(writer.AddSchema(type, "omgidl", ""), "/robot1/" + topic, "cdr", {});
+      const std::vector<uint8_t> cdr = bus::ToCdr(message);
+      writer.Write(channels[topic], static_cast<uint32_t>(h.frame_seq), static_cast<uint64_t>(h.stamp_ns),
+                   static_cast<uint64_t>(h.stamp_ns), std::as_bytes(std::span(cdr)));
+    };
+    for (const RecordedFrame& f : run_.frames) {
+      msg::GroundTruthPose t;
+      t.header = f.velocity->header;
+      t.x_m = f.truth->x;
+      t.y_m = f.truth->y;
+      t.theta_rad = f.truth->theta;
+      write("sim/ground_truth", "rslam::msg::GroundTruthPose", t.header, t);
+      write("odometry/velocity", "rslam::msg::Velocity", t.header, *f.velocity);
+      write("templates/view", "rslam::msg::ViewTemplate", t.header, *f.view);
+      write("pose_cells/action", "rslam::msg::PoseCellAction", t.header, *f.action);
+      write("occupancy/profile", "rslam::msg::ObstacleProfile", t.header, *f.profile);
+    }
+    writer.Close();
+    return path;
+  }
+
+  const YAML::Node demo_;
+  MapReplayConfig config_;
+  RecordedRun run_;
+  const std::filesystem::path dir_ = rslam::testing::ScratchFolderForTest();
+};
+
+TEST_F(MapReplayTest, GivesBackTheRecordedActionsAndBuildsTheirMap) {
+  const MapReplayResult r = ReplayMap(run_, config_);
+  EXPECT_EQ(r.actions_compared, run_.frames.size());
+  EXPECT_EQ(r.actions_differing, 0u);
+  ASSERT_TRUE(r.seen.map.has_value());
+  EXPECT_GT(r.seen.map->experiences.size(), 10u);
+  bool closes_loop = false;
+  for (const msg::ExperienceLink& l : r.seen.map->links) closes_loop = closes_loop || l.closes_loop;
+  EXPECT_TRUE(closes_loop) << "the second lap recognises the first";
+  EXPECT_EQ(r.seen.ground_truth.size(), run_.frames.size());
+  EXPECT_EQ(r.seen.experience_poses.size(), run_.frames.size());
+  EXPECT_EQ(r.seen.experience_first_frame.size(), r.seen.map->experiences.size());
+  EXPECT_GT(r.profiles_kept, 0u);
+  EXPECT_LT(r.profiles_kept, run_.frames.size());  // a standing or barely moved robot adds nothing
+  ASSERT_TRUE(r.seen.grid.has_value());
+  int free = 0;
+  for (int8_t c : r.seen.grid->cells) free += c >= 0 && c <= 19;
+  EXPECT_GT(free, 100);
+
+  // The recorded actions applied build the same map.
+  MapReplayConfig recorded = config_;
+  recorded.recorded_actions = true;
+  const MapReplayResult same = ReplayMap(run_, recorded);
+  EXPECT_EQ(same.actions_compared, 0u);
+  ASSERT_EQ(same.seen.map->experiences.size(), r.seen.map->experiences.size());
+  for (size_t i = 0; i < r.seen.map->experiences.size(); ++i) {
+    EXPECT_EQ(same.seen.map->experiences[i].x_m, r.seen.map->experiences[i].x_m);
+    EXPECT_EQ(same.seen.map->experiences[i].y_m, r.seen.map->experiences[i].y_m);
+  }
+  EXPECT_EQ(same.seen.grid->cells, r.seen.grid->cells);
+}
+
+TEST_F(MapReplayTest, CountsActionsThatDifferAndRefusesAnEmptyRun) {
+  run_.frames[100].action->offset_x_m += 0.01;
+  EXPECT_EQ(ReplayMap(run_, config_).actions_differing, 1u);
+  // Other pose-cell settings give other actions on the same input.
+  MapReplayConfig other = config_;
+  other.pose_cells.network.exp_delta_pc_threshold = 0.5;  // new experiences more often
+  EXPECT_GT(ReplayMap(run_, other).actions_differing, 0u);
+
+  RecordedRun empty;
+  empty.robot = "robot1";
+  empty.frames.push_back(run_.frames[0]);
+  empty.frames[0].velocity.reset();
+  empty.frames[0].view.reset();
+  EXPECT_THROW(ReplayMap(empty, config_), std::invalid_argument);
+}
+
+TEST_F(MapReplayTest, EvalMapReplaysARecordingAndJudgesItAsTheDemoDoes) {
+  const std::string path = WriteRecording();
+  const auto json = nlohmann::json::parse(RunRslam({"eval", "map", path, "--json", "--out", (dir_ / "out").string()}));
+  EXPECT_EQ(json["robot"], "robot1");
+  EXPECT_EQ(json["actions"], "replayed");
+  EXPECT_EQ(json["actions_compared"].get<size_t>(), run_.frames.size());
+  EXPECT_EQ(json["actions_differing"].get<size_t>(), 0u);
+  EXPECT_EQ(json["frames"].get<size_t>(), run_.frames.size());
+  for (const char* key : {"coverage", "map_precision", "experiences", "links", "loop_closures",
+                          "loop_closure_precision", "ate_m", "ate_odometry_m", "grid"})
+    EXPECT_TRUE(json.contains(key)) << key;
+  EXPECT_GT(json["coverage"].get<double>(), 0.0);
+  // The odometry here is the truth, so the map's error is small.
+  EXPECT_LT(json["ate_odometry_m"].get<double>(), 1e-6);
+  EXPECT_LT(json["ate_m"].get<double>(), 0.1);
+  for (const char* file : {"summary.json", "experience_map.png", "grid_errors.png"})
+    EXPECT_TRUE(std::filesystem::exists(dir_ / "out" / file)) << file;
+
+  const auto recorded = nlohmann::json::parse(RunRslam({"eval", "map", path, "--recorded-actions", "--json"}));
+  EXPECT_EQ(recorded["actions"], "recorded");
+  EXPECT_EQ(recorded["experiences"], json["experiences"]);
+  EXPECT_EQ(recorded["ate_m"], json["ate_m"]);
+
+  // A bad key is named; a robot the recording does not hold is an error.
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"eval", "map", path, "--set", "experience_map.no_such_key=1"},
+        std::vector<std::string>{"eval", "map", path, "--robot", "robot9"}}) {
+    try {
+      RunRslam(args);
+      FAIL() << "accepted " << args.back();
+    } catch (const CLI::RuntimeError& e) {
+      EXPECT_EQ(e.get_exit_code(), 1);
+    }
+  }
+  try {
+    RunRslam({"eval", "map", path, "--set", "experience_map.no_such_key=1"});
+  } catch (const CLI::RuntimeError& e) {
+    EXPECT_NE(std::string(e.what()).find("no_such_key"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir_);
+}
+
+}  // namespace
+}  // namespace rslam::eval

@@ -1,0 +1,133 @@
+#include "tools/eval/map_replay.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#include "services/experience_map/experience_action_message.h"
+#include "services/experience_map/experience_map.h"
+#include "services/occupancy/anchored_profile_map.h"
+#include "services/occupancy/profile_message.h"
+#include "services/pose_cells/pose_cell_action_message.h"
+#include "services/pose_cells/pose_cell_network.h"
+
+namespace rslam::eval {
+
+namespace {
+
+bool SameAction(const msg::PoseCellAction& a, const msg::PoseCellAction& b) {
+  return a.kind == b.kind && a.experience_id == b.experience_id && a.from_experience_id == b.from_experience_id &&
+         a.template_id == b.template_id && a.relative_angle_rad == b.relative_angle_rad &&
+         a.offset_x_m == b.offset_x_m && a.offset_y_m == b.offset_y_m && a.pc_x == b.pc_x && a.pc_y == b.pc_y &&
+         a.pc_th == b.pc_th && a.vtrans_mps == b.vtrans_mps && a.vrot_radps == b.vrot_radps && a.dt_s == b.dt_s &&
+         a.wall_seen == b.wall_seen && (!a.wall_seen || a.wall_direction_rad == b.wall_direction_rad);
+}
+
+}  // namespace
+
+MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config) {
+  MapReplayResult result;
+  demo::DemoObservations& seen = result.seen;
+  pose_cells::PoseCellNetwork network(config.pose_cells.network);
+  experience_map::ExperienceMap map(config.experience_map.map);
+  occupancy::AnchoredProfileMap profiles(config.occupancy.grid, config.occupancy.sensor,
+                                         config.occupancy.profile_alignment);
+  pose_cells::FloorBoundary scratch;
+  uint64_t next_action_seq = 0;
+  bool has_last_frame = false;
+  int64_t last_stamp_ns = 0;
+  std::size_t replayed = 0;
+
+  for (const RecordedFrame& frame : run.frames) {
+    msg::Header header;
+    header.robot_id = run.robot;
+    header.frame_seq = frame.frame_seq;
+    header.stamp_ns = frame.stamp_ns;
+    if (frame.truth) seen.ground_truth.push_back({frame.frame_seq, frame.stamp_ns, frame.truth->x, frame.truth->y, frame.truth->theta});
+    if (frame.velocity) {
+      const msg::Velocity& v = *frame.velocity;
+      seen.odometry.push_back({frame.frame_seq, frame.stamp_ns, v.vtrans_mps, v.vrot_radps, v.dt_s});
+    }
+    if (frame.view) seen.template_count = std::max(seen.template_count, frame.view->template_count);
+
+    // The pose-cell service's frame (PoseCellsNode::ProcessFrame), or the recorded action.
+    msg::PoseCellAction action;
+    if (config.recorded_actions) {
+      if (!frame.action) continue;
+      action = *frame.action;
+    } else {
+      if (!frame.velocity && !frame.view) continue;
+      double vtrans = 0.0, vrot = 0.0, dt = 0.0;
+      if (frame.velocity) {
+        vtrans = frame.velocity->vtrans_mps;
+        vrot = frame.velocity->vrot_radps;
+        dt = frame.velocity->dt_s;
+      } else if (has_last_frame && frame.stamp_ns > last_stamp_ns) {
+        dt = std::min(config.pose_cells.max_dt_s, static_cast<double>(frame.stamp_ns - last_stamp_ns) * 1e-9);
+      }
+      try {
+        action = pose_cells::StepFrame(network, header, frame.velocity ? &*frame.velocity : nullptr, vtrans, vrot, dt,
+                                       frame.view ? &*frame.view : nullptr, next_action_seq, scratch)
+                     .message;
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument("frame " + std::to_string(frame.frame_seq) + ": " + e.what());
+      }
+      ++next_action_seq;
+      has_last_frame = true;
+      last_stamp_ns = frame.stamp_ns;
+      if (frame.action) {
+        ++result.actions_compared;
+        if (!SameAction(action, *frame.action)) ++result.actions_differing;
+      }
+    }
+    ++replayed;
+
+    // The experience-map service's (ExperienceMapNode::Apply; an action it would refuse whole is
+    // skipped).
+    if (action.dt_s > config.experience_map.max_dt_s) continue;
+    experience_map::ApplyActionMessage(map, action);
+    const Pose2D robot = map.RobotPose();
+    seen.experience_poses.push_back({frame.frame_seq, frame.stamp_ns, robot.x, robot.y, robot.theta});
+    uint32_t current = pose_cells::kNoExperience;
+    Pose2D experience;
+    if (map.has_current()) {
+      const experience_map::Experience& e = map.experiences()[map.current_id()];
+      current = e.id;
+      experience = {e.x_m, e.y_m, e.th_rad};
+    }
+    seen.experience_first_frame.emplace(current, frame.frame_seq);
+
+    // The occupancy service's (OccupancyNode::ProcessFrame): the frame's profile anchored to the
+    // experience current at it.
+    if (frame.profile) {
+      occupancy::AnchoredProfile anchored{current, Between(experience, robot), experience, {}, {}};
+      anchored.profile = occupancy::ProfileFromMessage(*frame.profile);
+      if (profiles.IsNewView(current, anchored.offset, config.occupancy.profile_min_spacing_m,
+                             config.occupancy.profile_min_turn_rad)) {
+        profiles.AddProfile(std::move(anchored));
+        ++result.profiles_kept;
+      }
+    }
+  }
+  if (replayed == 0)
+    throw std::invalid_argument(config.recorded_actions ? "the recording holds no pose_cells/action of the robot"
+                                                        : "the recording holds no odometry/velocity or templates/view of the robot");
+
+  msg::ExperienceMap final_map;
+  final_map.header.robot_id = run.robot;
+  experience_map::FillMapMessage(map, final_map);
+  std::unordered_map<uint64_t, Pose2D> poses;
+  for (const msg::Experience& e : final_map.experiences) poses[e.id] = {e.x_m, e.y_m, e.theta_rad};
+  profiles.Rebuild([&poses](uint64_t id) -> std::optional<Pose2D> {
+    if (auto it = poses.find(id); it != poses.end()) return it->second;
+    return std::nullopt;
+  });
+  seen.grid = occupancy::GridToMessage(profiles.grid());
+  seen.experience_count = static_cast<uint32_t>(final_map.experiences.size());
+  seen.link_count = static_cast<uint32_t>(final_map.links.size());
+  seen.map = std::move(final_map);
+  return result;
+}
+
+}  // namespace rslam::eval

@@ -1,0 +1,50 @@
+#pragma once
+// A recorded run's map built again: each frame's recorded odometry/velocity (with its floor boundary
+// and wall direction) and templates/view through the pose-cell network, its action through the
+// experience map, and its recorded occupancy/profile anchored to the replayed map and drawn into a
+// grid once the map is final, every step the call the service makes (pose_cell_action_message.h,
+// experience_action_message.h, anchored_profile_map.h). With the run's own config the pose cells
+// give back every recorded pose_cells/action (actions_differing 0) and the map is the run's; with
+// changed pose_cells or experience_map keys it shows what they change on the same route, free of a
+// live run's other chances (the explorer goes where the map sends it, so a live run with a change
+// also drives elsewhere).
+//
+// The grid differs from the run's by its rebuild history alone: the service rebuilds the grid on
+// another thread as corrections come, each rebuild aligning only the profiles whose placement
+// moved (profile_alignment.h); here the profiles are drawn and aligned once, on the final map.
+//
+// Pure and deterministic: the caller reads the recording and the config.
+
+#include <cstddef>
+
+#include "services/experience_map/experience_map_node_config.h"
+#include "services/occupancy/occupancy_node_config.h"
+#include "services/pose_cells/pose_cells_node_config.h"
+#include "tools/demo/demo_monitor.h"
+#include "tools/eval/recorded_run.h"
+
+namespace rslam::eval {
+
+struct MapReplayConfig {
+  pose_cells::PoseCellsNodeConfig pose_cells;
+  experience_map::ExperienceMapNodeConfig experience_map;
+  occupancy::OccupancyNodeConfig occupancy;
+  // Apply the recorded pose_cells/action messages instead of running the pose cells (for a
+  // recording without velocities or views, or to replay only the map's keys).
+  bool recorded_actions = false;
+};
+
+struct MapReplayResult {
+  // What `rslam demo` would have seen: ground truth, the replayed map's pose at every frame and the
+  // frame each experience was first current, the odometry, the final map and grid, the templates.
+  demo::DemoObservations seen;
+  std::size_t actions_compared = 0;   // replayed actions with a recorded one for their frame
+  std::size_t actions_differing = 0;  // ... that differ from it (kind, ids, offsets, angle, odometry)
+  std::size_t profiles_kept = 0;      // drawn into the grid (the others added nothing new)
+};
+
+// Throws std::invalid_argument when the run has no frame to replay (no velocity or view, or with
+// recorded_actions no action) or a frame's message is one the service would refuse.
+MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config);
+
+}  // namespace rslam::eval
