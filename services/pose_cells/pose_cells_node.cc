@@ -65,6 +65,10 @@ class PoseCellsNode::Processor {
       joiner_.SkipView(seq);
     } else if (!joiner_.AddView(seq, v, NowNs())) {
       context_.Reject("late_view", "view for frame " + std::to_string(seq) + " came after the frame was processed");
+      // Its frame went on without it, but a template it learnt keeps its id: recorded unplaced, so
+      // the next views' ids follow on (associated with a place at its next sighting).
+      if (v.template_id >= network_.template_count() && v.template_id - network_.template_count() <= frames_without_view_)
+        network_.SkipTemplates(v.template_id + 1);
     }
     ProcessReady();
   }
@@ -162,12 +166,13 @@ class PoseCellsNode::Processor {
     const msg::ViewTemplate* view = frame.view ? &*frame.view : nullptr;
     if (view && view->template_id > network_.template_count()) {
       // The template learner learns at most one template per frame, so the templates this
-      // network never saw fit in the frames it never saw (it was down, or they were lost);
-      // more than that is a malformed id.
+      // network never saw fit in the frames it never saw or saw without their view (it was down,
+      // or they were lost or late); more than that is a malformed id.
       const uint64_t missed = view->template_id - network_.template_count();
       const uint64_t unseen_frames =
-          has_last_frame_ ? (frame.frame_seq > last_frame_seq_ ? frame.frame_seq - last_frame_seq_ - 1 : 0)
-                          : frame.frame_seq;
+          (has_last_frame_ ? (frame.frame_seq > last_frame_seq_ ? frame.frame_seq - last_frame_seq_ - 1 : 0)
+                           : frame.frame_seq) +
+          frames_without_view_;
       if (missed <= unseen_frames) {
         network_.SkipTemplates(view->template_id);
       } else {
@@ -188,6 +193,7 @@ class PoseCellsNode::Processor {
       return;
     }
     ++next_action_seq_;
+    frames_without_view_ = view ? 0 : frames_without_view_ + 1;
     if (step.action.refused_link_to != kNoExperience) {
       ++refused_links_;
       spdlog::debug("frame {}: link to experience {} refused by the floor boundaries ({} so far)", header.frame_seq,
@@ -347,6 +353,7 @@ class PoseCellsNode::Processor {
   PoseCellNetwork network_;
   Joiner joiner_;
   uint64_t reported_incomplete_ = 0;
+  uint64_t frames_without_view_ = 0;  // processed since the last one that had its view
   uint64_t refused_links_ = 0;  // exp_boundary_check, exp_submap_check
   FloorBoundary boundary_;      // the frame's, reused
   uint64_t next_action_seq_ = 0;

@@ -314,6 +314,40 @@ TEST_F(PoseCellsServiceTest, MalformedInputIsCountedAndTheServiceKeepsRunning) {
   EXPECT_TRUE(service->Running());
 }
 
+TEST_F(PoseCellsServiceTest, AViewThatComesLateKeepsTheTemplateIdsInStep) {
+  // A starved template learner (a demo run on a loaded machine): frame 10's view, which learnt
+  // template 5, comes after the frame went on without it (here: after frame 11's view, so the
+  // view stream has passed frame 10). Its template keeps its id, so the views after it, learning
+  // templates 6, 7, ..., are taken (before, each new one was refused as skipping one, for good).
+  auto service = Start();
+  std::vector<ScriptedFrame> script = testing::ScriptedLoop(30);
+  ASSERT_TRUE(script[10].view.is_new);
+  // Frame 11 learns a template too (template 5 is not seen again before 6 is learnt).
+  for (int i = 11; i < 30; ++i) {
+    ++script[i].view.template_id;
+    ++script[i].view.template_count;
+  }
+  script[11].view.is_new = true;
+  for (const ScriptedFrame& f : script) velocity_pub_->Publish(f.velocity);
+  for (int i : {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 11}) view_pub_->Publish(script[i].view);
+  std::vector<msg::PoseCellAction> actions = AwaitActions(11);  // frame 10 without its view
+  ASSERT_EQ(actions.size(), 11u) << service->Output();
+  for (int i = 10; i < 30; ++i)
+    if (i != 11) view_pub_->Publish(script[i].view);
+  actions = AwaitActions(19);
+  ASSERT_EQ(actions.size(), 19u) << service->Output();
+  EXPECT_EQ(actions.back().header.frame_seq, 29u);
+  // Two rejections: frame 10 processed without its view, and the view that came after it. A
+  // heartbeat after every frame was processed says so (they come every 0.2 s).
+  ASSERT_TRUE(AwaitStatus(2)) << service->Output();
+  std::optional<msg::ServiceStatus> last;
+  for (const auto until = std::chrono::steady_clock::now() + 1s; std::chrono::steady_clock::now() < until;)
+    if (auto s = status_sub_->TakeOne(100ms); s && s->service == "pose_cells") last = s;
+  ASSERT_TRUE(last);
+  EXPECT_EQ(last->messages_rejected, 2u) << service->Output();
+  EXPECT_TRUE(service->Running());
+}
+
 TEST_F(PoseCellsServiceTest, SigtermSavesStateAndRestartContinuesTheActionSequence) {
   auto service = Start();
   const std::vector<ScriptedFrame> script = testing::ScriptedLoop(40);
