@@ -1,5 +1,7 @@
 #include "common/bus/message_registry.h"
 
+#include <cctype>
+
 #include "common/bus/typed_cdr.h"
 #include "rslam/msg/all_messages.h"
 
@@ -33,5 +35,34 @@ const MessageTypeInfo* FindMessageType(std::string_view type_name) {
     if (type_name == t.type_name) return &t;
   return nullptr;
 }
+
+namespace {
+
+// The IDL's tokens without comments or layout.
+std::vector<std::string> IdlTokens(std::string_view idl) {
+  std::vector<std::string> tokens;
+  auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+  for (size_t i = 0; i < idl.size();) {
+    if (std::isspace(static_cast<unsigned char>(idl[i]))) {
+      ++i;
+    } else if (idl.compare(i, 2, "//") == 0) {
+      i = idl.find('\n', i);
+    } else if (idl.compare(i, 2, "/*") == 0) {
+      const size_t end = idl.find("*/", i + 2);
+      i = end == std::string_view::npos ? end : end + 2;
+    } else if (word(idl[i])) {
+      const size_t start = i;
+      while (i < idl.size() && word(idl[i])) ++i;
+      tokens.emplace_back(idl.substr(start, i - start));
+    } else {
+      tokens.emplace_back(1, idl[i++]);
+    }
+  }
+  return tokens;
+}
+
+}  // namespace
+
+bool SameIdlDefinition(std::string_view a, std::string_view b) { return IdlTokens(a) == IdlTokens(b); }
 
 }  // namespace rslam::bus

@@ -25,4 +25,8 @@ std::span<const MessageTypeInfo> AllMessageTypes();
 // Null when no type of that name exists.
 const MessageTypeInfo* FindMessageType(std::string_view type_name);
 
+// Whether two IDL texts define the same messages: their tokens agree once comments and layout are
+// set aside (a recording made by a build that only reworded a comment still reads).
+bool SameIdlDefinition(std::string_view a, std::string_view b);
+
 }  // namespace rslam::bus

@@ -1,6 +1,7 @@
 #include "services/experience_map/experience_action_message.h"
 
 #include <stdexcept>
+#include <vector>
 
 #include "common/math/angle.h"
 
@@ -54,6 +55,12 @@ AppliedAction ApplyActionMessage(ExperienceMap& map, const msg::PoseCellAction& 
   } catch (const std::invalid_argument& e) {
     applied.ids_refused = e.what();
     map.Apply(ExperienceAction{});
+  }
+  if (m.boundary_measured && map.config().exp_scan_links) {
+    std::vector<Eigen::Vector2f> points;
+    points.reserve(m.boundary.size());
+    for (const msg::FloorPoint& p : m.boundary) points.emplace_back(p.x_m, p.y_m);
+    map.ObserveBoundary(points);
   }
   return applied;
 }

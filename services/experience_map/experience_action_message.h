@@ -24,7 +24,8 @@ struct AppliedAction {
 
 // One validated pose_cells/action message as the service applies it: its odometry integrated, its
 // wall direction held (exp_manhattan), then the action (one whose ids do not fit is replaced by an
-// empty one, so the frame's correction budget is still spent).
+// empty one, so the frame's correction budget is still spent), then its floor boundary kept
+// (exp_scan_links).
 AppliedAction ApplyActionMessage(ExperienceMap& map, const msg::PoseCellAction& message);
 
 // Fills out's experiences, links and current_experience_id (kNoExperience when there is none);

@@ -1,6 +1,7 @@
 #include "services/experience_map/experience_map.h"
 
 #include "services/experience_map/pose_graph.h"
+#include "services/experience_map/scan_registration.h"
 
 #include <algorithm>
 #include <bit>
@@ -11,6 +12,7 @@
 #include <queue>
 #include <stdexcept>
 #include <string>
+#include <unordered_set>
 #include <utility>
 #include <vector>
 
@@ -24,6 +26,14 @@ constexpr double kPi = std::numbers::pi;
 }
 
 std::string Id(uint32_t id) { return id == kNoExperience ? std::string("none") : std::to_string(id); }
+
+// exp_scan_links: floor-boundary points are kept one per cell of this size.
+const ScanRegistrationOptions kScanRegistration;
+
+int64_t ScanCell(const Eigen::Vector2f& p) {
+  const auto cell = [](float v) { return static_cast<int64_t>(std::floor(v / kScanRegistration.cell_m)); };
+  return (cell(p.x()) << 32) ^ (cell(p.y()) & 0xffffffff);
+}
 
 }  // namespace
 
@@ -239,6 +249,12 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       if (has_current_) AddLink(current_, e.id, ObservedFromCurrent({}));
       SetCurrent(e.id, {});
       pose_cells_current_.reset();
+      // The robot has left the experiences before e, so the stretch centred exp_scan_region
+      // before it is complete.
+      if (config_.exp_scan_links && config_.exp_graph_optimisation && e.id > static_cast<uint32_t>(config_.exp_scan_region)) {
+        const uint32_t centre = e.id - 1 - static_cast<uint32_t>(config_.exp_scan_region);
+        if (centre % static_cast<uint32_t>(config_.exp_scan_every) == 0) TryScanLink(centre);
+      }
       break;
     }
     case ExperienceAction::Kind::kLink:
@@ -306,11 +322,92 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
   }
 }
 
+void ExperienceMap::ObserveBoundary(std::span<const Eigen::Vector2f> points) {
+  for (const Eigen::Vector2f& p : points)
+    if (!p.allFinite()) Reject("floor boundary point is not finite");
+  if (!config_.exp_scan_links || !has_current_) return;
+  Experience& e = experiences_[current_];
+  const Pose2D robot = Between({e.x_m, e.y_m, e.th_rad}, RobotPose());  // in the experience's frame
+  const double c = std::cos(robot.theta), s = std::sin(robot.theta);
+  const double range2 = config_.exp_scan_range_m * config_.exp_scan_range_m;
+  for (const Eigen::Vector2f& p : points) {
+    if (p.cast<double>().squaredNorm() > range2) continue;
+    const Eigen::Vector2f q(static_cast<float>(robot.x + c * p.x() - s * p.y()),
+                            static_cast<float>(robot.y + s * p.x() + c * p.y()));
+    const int64_t cell = ScanCell(q);
+    if (std::none_of(e.scan.begin(), e.scan.end(), [cell](const Eigen::Vector2f& k) { return ScanCell(k) == cell; }))
+      e.scan.push_back(q);
+  }
+}
+
+std::vector<Eigen::Vector2f> ExperienceMap::StretchPoints(uint32_t centre, uint32_t end) const {
+  const uint32_t region = static_cast<uint32_t>(config_.exp_scan_region);
+  const Experience& c = experiences_[centre];
+  std::vector<Eigen::Vector2f> out;
+  std::unordered_set<int64_t> cells;
+  for (uint32_t i = centre > region ? centre - region : 0; i < std::min(end, centre + region + 1); ++i) {
+    const Experience& e = experiences_[i];
+    const Pose2D at = Between({c.x_m, c.y_m, c.th_rad}, {e.x_m, e.y_m, e.th_rad});
+    const double cs = std::cos(at.theta), sn = std::sin(at.theta);
+    for (const Eigen::Vector2f& p : e.scan) {
+      const Eigen::Vector2f q(static_cast<float>(at.x + cs * p.x() - sn * p.y()),
+                              static_cast<float>(at.y + sn * p.x() + cs * p.y()));
+      if (cells.insert(ScanCell(q)).second) out.push_back(q);
+    }
+  }
+  return out;
+}
+
+void ExperienceMap::TryScanLink(uint32_t a) {
+  const Experience& newer = experiences_[a];
+  const uint32_t age = static_cast<uint32_t>(config_.exp_scan_min_age);
+  if (a < age) return;
+  // The old experience nearest to a in the map.
+  std::optional<uint32_t> older;
+  double nearest = config_.exp_scan_radius_m;
+  for (uint32_t j = 0; j <= a - age; ++j) {
+    const double d = std::hypot(experiences_[j].x_m - newer.x_m, experiences_[j].y_m - newer.y_m);
+    if (d <= nearest) {
+      nearest = d;
+      older = j;
+    }
+  }
+  if (!older) return;
+  const uint32_t region = static_cast<uint32_t>(config_.exp_scan_region);
+  const std::vector<Eigen::Vector2f> source = StretchPoints(a, static_cast<uint32_t>(experiences_.size()));
+  const std::vector<Eigen::Vector2f> target = StretchPoints(*older, a - region);  // the stretches do not overlap
+  const size_t min_pairs = static_cast<size_t>(config_.exp_scan_min_pairs);
+  if (source.size() < min_pairs || target.size() < min_pairs) return;
+  const Experience& o = experiences_[*older];
+  const Pose2D guess = Between({o.x_m, o.y_m, o.th_rad}, {newer.x_m, newer.y_m, newer.th_rad});
+  ++scan_registrations_;
+  const std::optional<ScanRegistration> r = RegisterScans(target, source, guess, kScanRegistration);
+  if (!r || r->pairs < config_.exp_scan_min_pairs || r->median_distance_m > config_.exp_scan_max_distance_m ||
+      r->inlier_share < config_.exp_scan_min_inlier_share || r->weak_share() < config_.exp_scan_min_weak_share)
+    return;
+  const Pose2D correction = Between(guess, r->pose);
+  if (std::hypot(correction.x, correction.y) > config_.exp_scan_max_correction_m ||
+      std::abs(correction.theta) > config_.exp_scan_max_correction_rad)
+    return;
+  ScanLink scan;
+  scan.link.from_id = *older;
+  scan.link.to_id = a;
+  scan.link.d_m = std::hypot(r->pose.x, r->pose.y);
+  scan.link.heading_rad = std::atan2(r->pose.y, r->pose.x);
+  scan.link.facing_rad = r->pose.theta;
+  scan.walls = r->walls;
+  scan_links_.push_back(scan);
+  graph_pending_ = true;
+}
+
 PoseGraphResult ExperienceMap::OptimiseGraph(int iterations, double stop_below) {
+  PoseGraphSigmas sigmas{config_.exp_graph_link_sigma_m,    config_.exp_graph_link_sigma_rad,
+                         config_.exp_graph_closure_sigma_m, config_.exp_graph_closure_sigma_rad,
+                         config_.exp_graph_closure_robust_phi};
+  sigmas.scan_m = config_.exp_graph_scan_sigma_m;
+  sigmas.scan_rad = config_.exp_graph_scan_sigma_rad;
   const PoseGraphResult result = OptimisePoseGraph(
-      experiences_, links_,
-      {config_.exp_graph_link_sigma_m, config_.exp_graph_link_sigma_rad, config_.exp_graph_closure_sigma_m,
-       config_.exp_graph_closure_sigma_rad, config_.exp_graph_closure_robust_phi},
+      experiences_, links_, scan_links_, sigmas,
       iterations, stop_below,
       manhattan_axes_ && config_.exp_manhattan_sigma_rad > 0
           ? std::optional<ManhattanAxes>({*manhattan_axes_, config_.exp_manhattan_sigma_rad, config_.exp_manhattan_max_offset_rad})
@@ -516,6 +613,11 @@ void ExperienceMap::MergeFrom(const ExperienceMap& other, const std::vector<MapA
     links_to_[copy.to_id].push_back(static_cast<uint32_t>(links_.size() - 1));
   }
   (void)link_offset;
+  for (ScanLink copy : other.scan_links_) {
+    copy.link.from_id += offset;
+    copy.link.to_id += offset;
+    scan_links_.push_back(copy);
+  }
   for (const MapAnchor& an : anchors) {
     AddLink(an.this_id, an.other_id + offset, {0.0, 0.0, 0.0, 0.0});
     links_.back().closes_loop = true;  // the two maps are joined where a place is recognised
@@ -556,9 +658,12 @@ proto::ExperienceMap ExperienceMap::Save() const {
     p->set_pc_y(e.pc_y);
     p->set_pc_th(e.pc_th);
     if (e.wall_rad) p->set_wall_rad(*e.wall_rad);
+    for (const Eigen::Vector2f& q : e.scan) {
+      p->add_scan_xy(q.x());
+      p->add_scan_xy(q.y());
+    }
   }
-  for (const Link& l : links_) {
-    auto* p = m.add_links();
+  const auto save_link = [](const Link& l, proto::Link* p) {
     p->set_from_id(l.from_id);
     p->set_to_id(l.to_id);
     p->set_d_m(l.d_m);
@@ -567,6 +672,14 @@ proto::ExperienceMap ExperienceMap::Save() const {
     p->set_travel_time_s(l.travel_time_s);
     p->set_traversals(l.traversals);
     p->set_closes_loop(l.closes_loop);
+  };
+  for (const Link& l : links_) save_link(l, m.add_links());
+  for (const ScanLink& l : scan_links_) {
+    proto::ScanLink* p = m.add_scan_links();
+    save_link(l.link, p->mutable_link());
+    p->set_walls_xx(l.walls(0, 0));
+    p->set_walls_xy(l.walls(0, 1));
+    p->set_walls_yy(l.walls(1, 1));
   }
   m.set_has_current(has_current_);
   m.set_current_id(current_);
@@ -601,13 +714,20 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
     if (!finite({e.x_m(), e.y_m(), e.th_rad(), e.pc_x(), e.pc_y(), e.pc_th(), e.wall_rad()})) {
       Reject("saved experience has non-finite numbers");
     }
+    if (e.scan_xy_size() % 2 != 0 || !std::all_of(e.scan_xy().begin(), e.scan_xy().end(), [](float v) { return std::isfinite(v); }))
+      Reject("saved experience's floor boundary is not finite (x, y) pairs");
   }
-  for (const auto& l : m.links()) {
+  const auto check_link = [&](const proto::Link& l) {
     if (l.from_id() >= n || l.to_id() >= n) Reject("saved link refers to an unknown experience");
     if (!finite({l.d_m(), l.heading_rad(), l.facing_rad(), l.travel_time_s()}) || l.d_m() < 0 ||
         l.travel_time_s() < 0) {
       Reject("saved link has invalid numbers");
     }
+  };
+  for (const auto& l : m.links()) check_link(l);
+  for (const auto& l : m.scan_links()) {
+    check_link(l.link());
+    if (!finite({l.walls_xx(), l.walls_xy(), l.walls_yy()})) Reject("saved scan link's walls are not finite");
   }
   if (m.has_current() && m.current_id() >= n) Reject("saved current experience is unknown");
   if (!m.has_current() && n > 0) Reject("saved map has experiences but no current one");
@@ -631,7 +751,8 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   for (uint32_t i = 0; i < n; ++i) {
     const auto& p = m.experiences(i);
     experiences_.push_back({i, p.x_m(), p.y_m(), WrapAngle(p.th_rad()), p.template_id(), p.pc_x(), p.pc_y(), p.pc_th(),
-                            p.has_wall_rad() ? std::optional(p.wall_rad()) : std::nullopt});
+                            p.has_wall_rad() ? std::optional(p.wall_rad()) : std::nullopt, {}});
+    for (int k = 0; k + 1 < p.scan_xy_size(); k += 2) experiences_.back().scan.emplace_back(p.scan_xy(k), p.scan_xy(k + 1));
   }
   links_.clear();
   links_from_.assign(n, {});
@@ -642,6 +763,13 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
                       std::max<uint32_t>(1, p.traversals()), p.closes_loop()});
     links_from_[p.from_id()].push_back(i);
     links_to_[p.to_id()].push_back(i);
+  }
+  scan_links_.clear();
+  for (const auto& p : m.scan_links()) {
+    const proto::Link& l = p.link();
+    ScanLink& scan = scan_links_.emplace_back();
+    scan.link = {l.from_id(), l.to_id(), l.d_m(), l.heading_rad(), l.facing_rad(), 0.0, 1, false};
+    scan.walls << p.walls_xx(), p.walls_xy(), p.walls_xy(), p.walls_yy();
   }
   has_current_ = m.has_current();
   current_ = m.current_id();

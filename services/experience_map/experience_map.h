@@ -27,12 +27,15 @@
 // pose_graph.h: after a loop closure or a re-traversal, at most every exp_graph_period_frames
 // frames, a few Gauss-Newton steps over the whole map (the first experience stays put).
 
+#include <Eigen/Core>
+
 #include <cmath>
 #include <cstdint>
 #include <deque>
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "common/math/angle.h"
@@ -52,6 +55,9 @@ struct Experience {
   // first seen while the robot was at it (ExperienceMap::HoldHeading); the least-squares
   // correction holds the experience to the building's axes with it.
   std::optional<double> wall_rad;
+  // exp_scan_links: the floor boundary seen while the robot was at it, in its frame (x forward,
+  // y left), at most one point per exp_scan cell (ExperienceMap::ObserveBoundary).
+  std::vector<Eigen::Vector2f> scan;
 };
 
 struct Link {
@@ -62,6 +68,15 @@ struct Link {
   double travel_time_s = 0.0;
   uint32_t traversals = 1;
   bool closes_loop = false;  // made by recognising a known place (kLink), not by a kCreate
+};
+
+// exp_scan_links: two stretches of the map whose walls were registered (scan_registration.h);
+// never traversed, and not among the map's links. link: the newer experience's pose in the older's
+// frame (from = older); walls: the scatter of the walls' normals in the older's frame, which
+// weighs the registered position by direction (along a lone wall it says nothing).
+struct ScanLink {
+  Link link;
+  Eigen::Matrix2d walls = Eigen::Matrix2d::Identity() / 2;
 };
 
 // What a least-squares correction (pose_graph.h) did.
@@ -102,6 +117,16 @@ class ExperienceMap {
   void HoldHeading(double wall_direction_rad);
   // The building's axes (one direction modulo pi/2) in the map frame, once fixed.
   std::optional<double> manhattan_axes() const { return manhattan_axes_; }
+
+  // With exp_scan_links: the frame's floor boundary (points in the robot frame, metres; call it
+  // after Apply for the frame that saw it), kept with the current experience. Without it, or
+  // before the first experience, it does nothing. Throws std::invalid_argument for a non-finite
+  // point.
+  void ObserveBoundary(std::span<const Eigen::Vector2f> points);
+  // Scan links made so far (from the older experience to the newer: the newer's pose in the
+  // older's frame), and the stretches registered to find them.
+  const std::vector<ScanLink>& scan_links() const { return scan_links_; }
+  uint64_t scan_registrations() const { return scan_registrations_; }
 
   // Applies one action, then spends this frame's correction budget (call it once per frame,
   // with kind kNone when the pose cells emitted nothing). Throws std::invalid_argument, with the
@@ -177,6 +202,12 @@ class ExperienceMap {
   // exp_recognition_max_jump_m: the recognition `a` (kLink or kSet, ids valid) would move the
   // robot too far from where the map has it.
   bool RefusesRecognition(const ExperienceAction& a) const;
+  // exp_scan_links: registers the stretch around experience `a` with the one around the nearest
+  // old experience in the map, and keeps a scan link when they agree.
+  void TryScanLink(uint32_t a);
+  // The scan points of experiences [centre - exp_scan_region, centre + exp_scan_region] (those
+  // below `end`), placed in centre's frame as the map has them, one per cell.
+  std::vector<Eigen::Vector2f> StretchPoints(uint32_t centre, uint32_t end) const;
   // The map's current experience, or the pose cells' after a refused recognition.
   bool IsCurrent(uint32_t id) const { return id == current_ || pose_cells_current_ == id; }
 
@@ -223,6 +254,8 @@ class ExperienceMap {
   std::optional<uint32_t> pose_cells_current_;
   uint64_t refused_recognitions_ = 0;
   uint64_t heading_recaptures_ = 0;
+  std::vector<ScanLink> scan_links_;
+  uint64_t scan_registrations_ = 0;  // not saved
   bool graph_pending_ = false;    // links changed since the last least-squares correction
   int frames_since_graph_ = 0;
 };

@@ -94,6 +94,33 @@ struct ExperienceMapConfig {
   // experience given its wall direction calls for a correction, as a closure does (at most one
   // every exp_graph_period_frames).
   double exp_manhattan_sigma_rad = 0.0;
+  // Scan links (not OpenRatSLAM's; scan_registration.h), with exp_graph_optimisation: each
+  // experience keeps the floor boundary seen while it was current (ExperienceMap::ObserveBoundary,
+  // points within exp_scan_range_m of the robot). Once the robot has left experience a, and for
+  // every exp_scan_every-th experience, the stretch of the map around a (the experiences within
+  // exp_scan_region ids of it, placed as the map has them) is registered with the stretch around
+  // the experience nearest to a in the map, if one made at least exp_scan_min_age experiences
+  // before lies within exp_scan_radius_m. A registration with exp_scan_min_pairs pairs, a median
+  // pair distance under exp_scan_max_distance_m, exp_scan_min_inlier_share of a's points on the
+  // other's walls, walls facing enough ways to fix the pose along them (exp_scan_min_weak_share)
+  // and a correction of the map within exp_scan_max_correction_m / _rad becomes a link of its own
+  // in the least squares (sigmas exp_graph_scan_sigma_m / _rad, the closures' robust kernel): the
+  // same walls seen on two visits are drawn in one place whether or not a view recognised it. Scan
+  // links are never traversed, and are not among the map's links.
+  bool exp_scan_links = false;
+  double exp_scan_range_m = 2.0;
+  int exp_scan_region = 15;
+  int exp_scan_every = 5;
+  int exp_scan_min_age = 150;
+  double exp_scan_radius_m = 1.0;
+  int exp_scan_min_pairs = 40;
+  double exp_scan_max_distance_m = 0.03;
+  double exp_scan_min_inlier_share = 0.5;
+  double exp_scan_min_weak_share = 0.1;
+  double exp_scan_max_correction_m = 0.5;
+  double exp_scan_max_correction_rad = 0.2;
+  double exp_graph_scan_sigma_m = 0.05;
+  double exp_graph_scan_sigma_rad = 0.01;
 
   template <class V>
   void VisitFields(V& v) {
@@ -147,6 +174,23 @@ struct ExperienceMapConfig {
       "the largest drift taken out so (rad)");
     v("exp_manhattan_sigma_rad", exp_manhattan_sigma_rad,
       "> 0, with exp_graph_optimisation: uncertainty of the experiences' wall directions in the least-squares correction (rad)");
+    v("exp_scan_links", exp_scan_links,
+      "with exp_graph_optimisation: register stretches of the map that see the same walls and tie them by a link");
+    v("exp_scan_range_m", exp_scan_range_m, "floor-boundary points farther than this from the robot are not kept (m)");
+    v("exp_scan_region", exp_scan_region, "a stretch of the map: the experiences within this many ids of its centre");
+    v("exp_scan_every", exp_scan_every, "register the stretch around every this-many-th experience");
+    v("exp_scan_min_age", exp_scan_min_age, "... with one whose centre was made at least this many experiences before");
+    v("exp_scan_radius_m", exp_scan_radius_m, "... and lies within this distance in the map (m)");
+    v("exp_scan_min_pairs", exp_scan_min_pairs, "a registration needs this many point pairs");
+    v("exp_scan_max_distance_m", exp_scan_max_distance_m, "... their median distance under this (m)");
+    v("exp_scan_min_inlier_share", exp_scan_min_inlier_share,
+      "... this share of the newer stretch's points within two cells of the older's");
+    v("exp_scan_min_weak_share", exp_scan_min_weak_share,
+      "... walls facing enough ways to fix the pose along them (0: one straight wall, 0.5: every way)");
+    v("exp_scan_max_correction_m", exp_scan_max_correction_m, "... and a move of the map's guess within this (m)");
+    v("exp_scan_max_correction_rad", exp_scan_max_correction_rad, "... and a turn within this (rad)");
+    v("exp_graph_scan_sigma_m", exp_graph_scan_sigma_m, "uncertainty of a scan link's position (m)");
+    v("exp_graph_scan_sigma_rad", exp_graph_scan_sigma_rad, "uncertainty of a scan link's facing (rad)");
   }
 
   void Validate() const {
@@ -193,6 +237,25 @@ struct ExperienceMapConfig {
             "exp_manhattan_gain", "must be in (0, 1]");
     Require(std::isfinite(exp_manhattan_sigma_rad) && exp_manhattan_sigma_rad >= 0, "exp_manhattan_sigma_rad",
             "must be >= 0");
+    Require(std::isfinite(exp_scan_range_m) && exp_scan_range_m > 0, "exp_scan_range_m", "must be positive");
+    Require(exp_scan_region >= 1 && exp_scan_region <= 1000, "exp_scan_region", "must be 1..1000");
+    Require(exp_scan_every >= 1, "exp_scan_every", "must be at least 1");
+    Require(exp_scan_min_age > 2 * exp_scan_region, "exp_scan_min_age",
+            "must exceed twice exp_scan_region (the two stretches must not overlap)");
+    Require(std::isfinite(exp_scan_radius_m) && exp_scan_radius_m > 0, "exp_scan_radius_m", "must be positive");
+    Require(exp_scan_min_pairs >= 3, "exp_scan_min_pairs", "must be at least 3");
+    Require(std::isfinite(exp_scan_max_distance_m) && exp_scan_max_distance_m > 0, "exp_scan_max_distance_m",
+            "must be positive");
+    Require(std::isfinite(exp_scan_min_inlier_share) && exp_scan_min_inlier_share >= 0 && exp_scan_min_inlier_share <= 1,
+            "exp_scan_min_inlier_share", "must be in [0, 1]");
+    Require(std::isfinite(exp_scan_min_weak_share) && exp_scan_min_weak_share >= 0 && exp_scan_min_weak_share <= 0.5,
+            "exp_scan_min_weak_share", "must be in [0, 0.5]");
+    Require(std::isfinite(exp_scan_max_correction_m) && exp_scan_max_correction_m > 0, "exp_scan_max_correction_m",
+            "must be positive");
+    Require(std::isfinite(exp_scan_max_correction_rad) && exp_scan_max_correction_rad > 0,
+            "exp_scan_max_correction_rad", "must be positive");
+    Require(exp_graph_scan_sigma_m > 0, "exp_graph_scan_sigma_m", "must be positive");
+    Require(exp_graph_scan_sigma_rad > 0, "exp_graph_scan_sigma_rad", "must be positive");
   }
 };
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <initializer_list>
 #include <numbers>
 #include <numeric>
 
@@ -14,17 +15,18 @@ namespace {
 
 // Index of each experience's variables in the system (3 per free experience), or -1 for the
 // lowest-id experience of each connected part, which stays where it is.
-std::vector<int> FreeIndices(size_t n, const std::vector<Link>& links) {
+std::vector<int> FreeIndices(size_t n, std::initializer_list<const std::vector<Link>*> link_sets) {
   std::vector<uint32_t> parent(n);
   std::iota(parent.begin(), parent.end(), 0U);
   auto root = [&](uint32_t e) {
     while (parent[e] != e) e = parent[e] = parent[parent[e]];
     return e;
   };
-  for (const Link& l : links) {
-    const uint32_t a = root(l.from_id), b = root(l.to_id);
-    parent[std::max(a, b)] = std::min(a, b);  // the root of a part is its lowest id
-  }
+  for (const std::vector<Link>* links : link_sets)
+    for (const Link& l : *links) {
+      const uint32_t a = root(l.from_id), b = root(l.to_id);
+      parent[std::max(a, b)] = std::min(a, b);  // the root of a part is its lowest id
+    }
   std::vector<int> index(n, -1);
   int next = 0;
   for (uint32_t e = 0; e < n; ++e) {
@@ -36,9 +38,11 @@ std::vector<int> FreeIndices(size_t n, const std::vector<Link>& links) {
 }  // namespace
 
 PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
-                                  const PoseGraphSigmas& sigmas, int iterations, double stop_below,
-                                  const std::optional<ManhattanAxes>& manhattan) {
-  const std::vector<int> index = FreeIndices(experiences.size(), links);
+                                  const std::vector<ScanLink>& scan_links, const PoseGraphSigmas& sigmas,
+                                  int iterations, double stop_below, const std::optional<ManhattanAxes>& manhattan) {
+  std::vector<Link> scan_link_ends;
+  for (const ScanLink& l : scan_links) scan_link_ends.push_back(l.link);
+  const std::vector<int> index = FreeIndices(experiences.size(), {&links, &scan_link_ends});
   const int size = static_cast<int>(3 * std::count_if(index.begin(), index.end(), [](int i) { return i >= 0; }));
   PoseGraphResult result;
   if (size == 0) {
@@ -54,9 +58,10 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver;
   for (int iteration = 0; iteration < iterations; ++iteration) {
     triplets.clear();
-    triplets.reserve(links.size() * 36);
+    triplets.reserve((links.size() + scan_links.size()) * 36);
     Eigen::VectorXd gradient = Eigen::VectorXd::Zero(size);
-    for (const Link& l : links) {
+    // weight: an Eigen::DiagonalMatrix (links) or a full Eigen::Matrix3d (scan links), in from's frame.
+    const auto add_link = [&](const Link& l, auto weight, bool robust) {
       const Experience& from = experiences[l.from_id];
       const Experience& to = experiences[l.to_id];
       const double c = std::cos(from.th_rad), s = std::sin(from.th_rad);
@@ -71,29 +76,37 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
       jt << c, s, 0,  //
           -s, c, 0,   //
           0, 0, 1;
-      Eigen::Vector3d weight = l.closes_loop ? closure_weight : link_weight;
       // Dynamic covariance scaling (Agarwal et al., ICRA 2013): a recognition that disagrees with
       // the rest of the map by far more than its uncertainty (a wrong loop closure) pulls on it
       // with a weight scaled by s^2, s = min(1, 2 phi / (phi + chi^2)).
-      if (l.closes_loop && sigmas.closure_robust_phi > 0) {
-        const double chi2 = error.dot(weight.cwiseProduct(error));
+      if (robust && sigmas.closure_robust_phi > 0) {
+        const double chi2 = error.dot(weight * error);
         const double scale = std::min(1.0, 2 * sigmas.closure_robust_phi / (sigmas.closure_robust_phi + chi2));
-        weight *= scale * scale;
+        weight = weight * (scale * scale);
       }
-      const Eigen::DiagonalMatrix<double, 3> w(weight);
       const int at[2] = {index[l.from_id], index[l.to_id]};
       const Eigen::Matrix3d* j[2] = {&jf, &jt};
       for (int a = 0; a < 2; ++a) {
         if (at[a] < 0) continue;
-        gradient.segment<3>(at[a]) += j[a]->transpose() * (w * error);
+        gradient.segment<3>(at[a]) += j[a]->transpose() * (weight * error);
         for (int b = 0; b < 2; ++b) {
           if (at[b] < 0) continue;
-          const Eigen::Matrix3d block = j[a]->transpose() * w * *j[b];
+          const Eigen::Matrix3d block = j[a]->transpose() * weight * *j[b];
           for (int r = 0; r < 3; ++r) {
             for (int q = 0; q < 3; ++q) triplets.emplace_back(at[a] + r, at[b] + q, block(r, q));
           }
         }
       }
+    };
+    for (const Link& l : links) {
+      add_link(l, Eigen::DiagonalMatrix<double, 3>(l.closes_loop ? closure_weight : link_weight), l.closes_loop);
+    }
+    for (const ScanLink& l : scan_links) {
+      // Across the walls as the registration saw them (2 x walls is I for walls facing every way).
+      Eigen::Matrix3d weight = Eigen::Matrix3d::Zero();
+      weight.topLeftCorner<2, 2>() = 2 * l.walls / (sigmas.scan_m * sigmas.scan_m);
+      weight(2, 2) = 1 / (sigmas.scan_rad * sigmas.scan_rad);
+      add_link(l.link, weight, true);
     }
     if (manhattan) {
       // A unary term on theta: every free experience has a theta diagonal entry from its links,

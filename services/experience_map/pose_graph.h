@@ -27,7 +27,8 @@ namespace rslam::experience_map {
 struct PoseGraphSigmas {
   double link_m, link_rad;        // odometric link
   double closure_m, closure_rad;  // link made by recognising a place
-  double closure_robust_phi = 0;   // > 0: scale down closures that disagree (see pose_graph.cc)
+  double closure_robust_phi = 0;   // > 0: scale down closures (and scan links) that disagree (see pose_graph.cc)
+  double scan_m = 1, scan_rad = 1;  // scan link (the walls of two stretches registered)
 };
 
 // The building's axes (exp_manhattan): an experience with a wall direction w (relative to its
@@ -40,9 +41,12 @@ struct ManhattanAxes {
   double max_offset_rad;
 };
 
-// Runs up to `iterations` Gauss-Newton steps over all experiences and links, fewer when a step
-// moves nothing by more than stop_below (m or rad). Links must name existing experiences.
+// Runs up to `iterations` Gauss-Newton steps over all experiences, links and scan links (the same
+// error as a link's; its position weighted by 2 x walls / scan_m^2, so only across the walls the
+// registration saw, its facing by 1 / scan_rad^2), fewer when a step moves nothing by more than
+// stop_below (m or rad). Links must name existing experiences.
 PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
+                                  const std::vector<ScanLink>& scan_links,
                                   const PoseGraphSigmas& sigmas, int iterations, double stop_below = 0.0,
                                   const std::optional<ManhattanAxes>& manhattan = std::nullopt);
 

@@ -54,9 +54,11 @@ FrameStep StepFrame(PoseCellNetwork& network, const msg::Header& header, const m
                      : network.ProcessFrameWithoutView(vtrans_mps, vrot_radps, dt_s, seen);
   step.message = ToActionMessage(step.action, action_seq, vtrans_mps, vrot_radps, dt_s);
   step.message.header = header;
-  if (velocity && velocity->wall_seen) {  // for the experience map (exp_manhattan)
-    step.message.wall_seen = true;
-    step.message.wall_direction_rad = velocity->wall_direction_rad;
+  if (velocity) {  // for the experience map (exp_manhattan, exp_scan_links)
+    step.message.wall_seen = velocity->wall_seen;
+    step.message.wall_direction_rad = velocity->wall_seen ? velocity->wall_direction_rad : 0.0;
+    step.message.boundary_measured = velocity->boundary_measured;
+    step.message.boundary = velocity->boundary;
   }
   return step;
 }

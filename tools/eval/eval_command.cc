@@ -273,6 +273,7 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
     replay.recorded_actions = options.recorded_actions;
     const RecordedRun run = ReadRecordedRun(options.recording, options.robot);
     if (run.frames.empty()) Fail(err, "map", options.recording + " holds no frames of a robot");
+    for (const std::string& skipped : run.skipped) err << "rslam eval map: left out " << skipped << "\n";
     const MapReplayResult r = ReplayMap(run, replay);
 
     // Judged as `rslam demo` judges its run (tools/demo/demo_metrics.h).
@@ -289,6 +290,8 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
     json["actions_compared"] = r.actions_compared;
     json["actions_differing"] = r.actions_differing;
     json["profiles_kept"] = r.profiles_kept;
+    json["scan_links"] = {{"registered", r.scan_registrations}, {"kept", r.scan_links}};
+    json["skipped_channels"] = run.skipped;
     if (!options.out_dir.empty()) {
       const std::filesystem::path dir(options.out_dir);
       std::filesystem::create_directories(dir);

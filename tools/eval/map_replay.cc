@@ -21,7 +21,8 @@ bool SameAction(const msg::PoseCellAction& a, const msg::PoseCellAction& b) {
          a.template_id == b.template_id && a.relative_angle_rad == b.relative_angle_rad &&
          a.offset_x_m == b.offset_x_m && a.offset_y_m == b.offset_y_m && a.pc_x == b.pc_x && a.pc_y == b.pc_y &&
          a.pc_th == b.pc_th && a.vtrans_mps == b.vtrans_mps && a.vrot_radps == b.vrot_radps && a.dt_s == b.dt_s &&
-         a.wall_seen == b.wall_seen && (!a.wall_seen || a.wall_direction_rad == b.wall_direction_rad);
+         a.wall_seen == b.wall_seen && (!a.wall_seen || a.wall_direction_rad == b.wall_direction_rad) &&
+         a.boundary_measured == b.boundary_measured && a.boundary == b.boundary;
 }
 
 }  // namespace
@@ -127,6 +128,8 @@ MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config)
   seen.experience_count = static_cast<uint32_t>(final_map.experiences.size());
   seen.link_count = static_cast<uint32_t>(final_map.links.size());
   seen.map = std::move(final_map);
+  result.scan_registrations = map.scan_registrations();
+  result.scan_links = map.scan_links().size();
   return result;
 }
 

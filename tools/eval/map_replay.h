@@ -41,6 +41,7 @@ struct MapReplayResult {
   std::size_t actions_compared = 0;   // replayed actions with a recorded one for their frame
   std::size_t actions_differing = 0;  // ... that differ from it (kind, ids, offsets, angle, odometry)
   std::size_t profiles_kept = 0;      // drawn into the grid (the others added nothing new)
+  std::size_t scan_registrations = 0, scan_links = 0;  // experience_map.exp_scan_links
 };
 
 // Throws std::invalid_argument when the run has no frame to replay (no velocity or view, or with

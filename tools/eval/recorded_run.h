@@ -26,6 +26,9 @@ struct RecordedFrame {
 struct RecordedRun {
   std::string robot;
   std::vector<RecordedFrame> frames;  // by frame number
+  // "topic: why" of the channels left out: recorded by a build whose message definition differs
+  // from this build's (they would not decode).
+  std::vector<std::string> skipped;
 };
 
 // The frames of `robot` (empty: the first robot whose frame message is read). Throws

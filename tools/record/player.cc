@@ -22,30 +22,6 @@
 namespace rslam::record {
 namespace {
 
-// The IDL's tokens without comments or layout: two schema texts define the same message when
-// these agree (a build that only reworded a comment still plays the recording).
-std::vector<std::string> IdlTokens(std::string_view idl) {
-  std::vector<std::string> tokens;
-  auto word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
-  for (size_t i = 0; i < idl.size();) {
-    if (std::isspace(static_cast<unsigned char>(idl[i]))) {
-      ++i;
-    } else if (idl.compare(i, 2, "//") == 0) {
-      i = idl.find('\n', i);
-    } else if (idl.compare(i, 2, "/*") == 0) {
-      const size_t end = idl.find("*/", i + 2);
-      i = end == std::string_view::npos ? end : end + 2;
-    } else if (word(idl[i])) {
-      const size_t start = i;
-      while (i < idl.size() && word(idl[i])) ++i;
-      tokens.emplace_back(idl.substr(start, i - start));
-    } else {
-      tokens.emplace_back(1, idl[i++]);
-    }
-  }
-  return tokens;
-}
-
 using Clock = std::chrono::steady_clock;
 
 // Thrown inside McapReader::ForEachMessage to leave it when the stop token fires.
@@ -179,7 +155,7 @@ PlayReport PlayFiles(bus::Participant& participant, const std::vector<std::strin
         why = "no omgidl schema";
       } else if ((type = bus::FindMessageType(schema->second.name)) == nullptr) {
         why = "unknown type " + schema->second.name;
-      } else if (IdlTokens(schema->second.data) != IdlTokens(type->idl)) {
+      } else if (!bus::SameIdlDefinition(schema->second.data, type->idl)) {
         // Recorded by another version of rslam whose message differs: today's readers would
         // refuse every sample as malformed.
         why = "recorded with another definition of " + schema->second.name + " than this build's";

@@ -65,10 +65,12 @@ json ToJson(const msg::Image& m) {
   return {{"header", ToJson(m.header)}, {"width", m.width},       {"height", m.height},
           {"encoding", m.encoding},     {"step", m.step},         {"data", Bytes(m.data)}};
 }
-json ToJson(const msg::Velocity& m) {
+json ToJson(const std::vector<msg::FloorPoint>& points) {
   json boundary = json::array();
-  for (const auto& p : m.boundary)
-    boundary.push_back({{"x_m", static_cast<double>(p.x_m)}, {"y_m", static_cast<double>(p.y_m)}});
+  for (const auto& p : points) boundary.push_back({{"x_m", static_cast<double>(p.x_m)}, {"y_m", static_cast<double>(p.y_m)}});
+  return boundary;
+}
+json ToJson(const msg::Velocity& m) {
   return {{"header", ToJson(m.header)},
           {"vtrans_mps", m.vtrans_mps},
           {"vrot_radps", m.vrot_radps},
@@ -77,7 +79,7 @@ json ToJson(const msg::Velocity& m) {
           {"wall_seen", m.wall_seen},
           {"wall_direction_rad", m.wall_direction_rad},
           {"boundary_measured", m.boundary_measured},
-          {"boundary", boundary}};
+          {"boundary", ToJson(m.boundary)}};
 }
 json ToJson(const msg::PoseCellAction& m) {
   return {{"header", ToJson(m.header)},
@@ -96,7 +98,9 @@ json ToJson(const msg::PoseCellAction& m) {
           {"vrot_radps", m.vrot_radps},
           {"dt_s", m.dt_s},
           {"wall_seen", m.wall_seen},
-          {"wall_direction_rad", m.wall_direction_rad}};
+          {"wall_direction_rad", m.wall_direction_rad},
+          {"boundary_measured", m.boundary_measured},
+          {"boundary", ToJson(m.boundary)}};
 }
 json ToJson(const msg::ExperienceMap& m) {
   json experiences = json::array();

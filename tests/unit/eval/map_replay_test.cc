@@ -93,15 +93,18 @@ class MapReplayTest : public ::testing::Test {
     }
   }
 
-  // The run as `rslam record` writes it: each message on /robot1/<topic>, in CDR.
-  std::string WriteRecording() const {
-    const std::string path = (dir_ / "run.mcap").string();
+  // The run as `rslam record` writes it: each message on /robot1/<topic>, in CDR. With
+  // old_actions, pose_cells/action as a build with another definition of it recorded them.
+  std::string WriteRecording(bool old_actions = false) const {
+    const std::string path = (dir_ / (old_actions ? "old.mcap" : "run.mcap")).string();
     mcap::McapWriter writer;
     writer.Open(path);
     std::map<std::string, uint16_t> channels;
-    const auto write = [&](const std::string& topic, const std::string& type, const msg::Header& h, auto message) {
+    const auto write = [&](const std::string& topic, const msg::Header& h, auto message) {
+      using Traits = bus::MessageTraits<decltype(message)>;
       if (!channels.count(topic))
-        channels[topic] = writer.AddChannel(writer.AddSchema(type, "omgidl", ""), "/robot1/" + topic, "cdr", {});
+        channels[topic] =
+            writer.AddChannel(writer.AddSchema(Traits::kTypeName, "omgidl", Traits::kIdl), "/robot1/" + topic, "cdr", {});
       const std::vector<uint8_t> cdr = bus::ToCdr(message);
       writer.Write(channels[topic], static_cast<uint32_t>(h.frame_seq), static_cast<uint64_t>(h.stamp_ns),
                    static_cast<uint64_t>(h.stamp_ns), std::as_bytes(std::span(cdr)));
@@ -112,11 +115,22 @@ class MapReplayTest : public ::testing::Test {
       t.x_m = f.truth->x;
       t.y_m = f.truth->y;
       t.theta_rad = f.truth->theta;
-      write("sim/ground_truth", "rslam::msg::GroundTruthPose", t.header, t);
-      write("odometry/velocity", "rslam::msg::Velocity", t.header, *f.velocity);
-      write("templates/view", "rslam::msg::ViewTemplate", t.header, *f.view);
-      write("pose_cells/action", "rslam::msg::PoseCellAction", t.header, *f.action);
-      write("occupancy/profile", "rslam::msg::ObstacleProfile", t.header, *f.profile);
+      write("sim/ground_truth", t.header, t);
+      write("odometry/velocity", t.header, *f.velocity);
+      write("templates/view", t.header, *f.view);
+      if (old_actions) {
+        if (!channels.count("pose_cells/action"))
+          channels["pose_cells/action"] = writer.AddChannel(
+              writer.AddSchema("rslam::msg::PoseCellAction", "omgidl",
+                               "module rslam { module msg { @final struct PoseCellAction { uint64 action_seq; }; }; };"),
+              "/robot1/pose_cells/action", "cdr", {});
+        const std::vector<uint8_t> cdr = {0, 1, 0, 0, 7, 0, 0, 0, 0, 0, 0, 0};
+        writer.Write(channels["pose_cells/action"], 0, static_cast<uint64_t>(t.header.stamp_ns),
+                     static_cast<uint64_t>(t.header.stamp_ns), std::as_bytes(std::span(cdr)));
+      } else {
+        write("pose_cells/action", t.header, *f.action);
+      }
+      write("occupancy/profile", t.header, *f.profile);
     }
     writer.Close();
     return path;
@@ -198,6 +212,13 @@ TEST_F(MapReplayTest, EvalMapReplaysARecordingAndJudgesItAsTheDemoDoes) {
   EXPECT_EQ(recorded["actions"], "recorded");
   EXPECT_EQ(recorded["experiences"], json["experiences"]);
   EXPECT_EQ(recorded["ate_m"], json["ate_m"]);
+
+  // A recording made before pose_cells/action changed replays without the recorded actions.
+  const auto old = nlohmann::json::parse(RunRslam({"eval", "map", WriteRecording(true), "--json"}));
+  EXPECT_EQ(old["actions_compared"].get<size_t>(), 0u);
+  ASSERT_EQ(old["skipped_channels"].size(), 1u);
+  EXPECT_NE(old["skipped_channels"][0].get<std::string>().find("/robot1/pose_cells/action"), std::string::npos);
+  EXPECT_EQ(old["experiences"], json["experiences"]);
 
   // A bad key is named; a robot the recording does not hold is an error.
   for (const std::vector<std::string>& args :

@@ -110,8 +110,10 @@ TEST_F(OdometryReplayTest, EvalOdometryReplaysARecording) {
   {
     mcap::McapWriter writer;
     writer.Open(path);
-    const uint16_t truth_schema = writer.AddSchema("rslam::msg::GroundTruthPose", "omgidl", "");
-    const uint16_t velocity_schema = writer.AddSchema("rslam::msg::Velocity", "omgidl", "");
+    const uint16_t truth_schema = writer.AddSchema("rslam::msg::GroundTruthPose", "omgidl",
+                                                   bus::MessageTraits<msg::GroundTruthPose>::kIdl);
+    const uint16_t velocity_schema =
+        writer.AddSchema("rslam::msg::Velocity", "omgidl", bus::MessageTraits<msg::Velocity>::kIdl);
     const uint16_t truth = writer.AddChannel(truth_schema, "/robot1/sim/ground_truth", "cdr", {});
     const uint16_t velocity = writer.AddChannel(velocity_schema, "/robot1/odometry/velocity", "cdr", {});
     const auto write = [&writer](uint16_t channel, uint32_t seq, uint64_t time, const std::vector<uint8_t>& cdr) {

@@ -1,0 +1,50 @@
+#pragma once
+// Registers two sets of floor-boundary points (where the floor meets the walls, paper 003) from a
+// guess of their relative pose: the measurement of a scan link (experience_map.h,
+// exp_scan_links), which ties two stretches of the map that see the same walls.
+//
+// Point-to-line ICP (Censi, "An ICP variant using a point-to-line metric", ICRA 2008, without
+// its closed form): each source point pairs with the nearest target point within the pairing
+// distance, whose line is the target's local direction (principal axis of its neighbours within
+// 2 x cell); Gauss-Newton on (x, y, theta) minimises the pairs' distances along the line normals.
+// The pairing distance starts at max_pair_m and shrinks to three times the pairs' median distance
+// (at least min_pair_m), so the far pairs of a first guess pull only while they must.
+//
+// A wall seen alone fixes the pose across it, not along it: `walls` is the scatter of the pairs'
+// normals (sum of n n^T / pairs, in the target frame; eigenvalues summing to 1), diag(0, 1) for
+// one straight wall along x, I / 2 when the walls face every way. It says in which directions the
+// registered position is measured and in which it is a guess.
+//
+// Pure and deterministic.
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <span>
+
+#include "common/math/pose2d.h"
+
+namespace rslam::experience_map {
+
+struct ScanRegistrationOptions {
+  double cell_m = 0.03;      // the points' spacing (they are thinned to one per cell of this size)
+  double max_pair_m = 0.3;   // pairing distance of the first step
+  double min_pair_m = 0.06;  // ... never below this
+  int iterations = 20;
+};
+
+struct ScanRegistration {
+  Pose2D pose;                     // the source frame in the target frame
+  int pairs = 0;                   // at the last step
+  double median_distance_m = 0.0;  // of the pairs' points at the last step
+  double inlier_share = 0.0;       // source points within 2 x cell_m of a target point
+  Eigen::Matrix2d walls = Eigen::Matrix2d::Zero();  // see above
+  double weak_share() const;       // the smaller eigenvalue of walls: 0 (one wall) to 0.5
+};
+
+// nullopt when either set has fewer than 3 points or no step finds 3 pairs.
+std::optional<ScanRegistration> RegisterScans(std::span<const Eigen::Vector2f> target,
+                                              std::span<const Eigen::Vector2f> source, const Pose2D& initial,
+                                              const ScanRegistrationOptions& options = {});
+
+}  // namespace rslam::experience_map

@@ -1,0 +1,203 @@
+// Scan links (experience_map_config.h, exp_scan_links): the walls two stretches of the map see,
+// registered (scan_registration.h) and tied in the least squares.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "services/experience_map/experience_map.h"
+#include "services/experience_map/scan_registration.h"
+
+namespace rslam::experience_map {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+struct Segment {
+  Eigen::Vector2d a, b;
+};
+
+// A room 4.6 x 2.4 m with two boxes in it.
+std::vector<Segment> Room() {
+  std::vector<Segment> walls;
+  const auto box = [&walls](double x0, double y0, double x1, double y1) {
+    walls.push_back({{x0, y0}, {x1, y0}});
+    walls.push_back({{x1, y0}, {x1, y1}});
+    walls.push_back({{x1, y1}, {x0, y1}});
+    walls.push_back({{x0, y1}, {x0, y0}});
+  };
+  box(-0.8, -1.2, 3.8, 1.2);
+  box(1.2, 0.5, 1.6, 0.9);
+  box(2.2, -0.9, 2.5, -0.6);
+  return walls;
+}
+
+// Where the floor meets the walls as a camera at `pose` sees it: one point per degree over 60
+// degrees, up to 2.5 m, in the robot frame.
+std::vector<Eigen::Vector2f> Boundary(const std::vector<Segment>& walls, const Pose2D& pose) {
+  std::vector<Eigen::Vector2f> points;
+  for (int degree = -30; degree <= 30; ++degree) {
+    const double bearing = degree * kPi / 180;
+    const Eigen::Vector2d o(pose.x, pose.y), d(std::cos(pose.theta + bearing), std::sin(pose.theta + bearing));
+    double nearest = 2.5;
+    for (const Segment& w : walls) {
+      const Eigen::Vector2d e = w.b - w.a;
+      const double denominator = d.x() * e.y() - d.y() * e.x();
+      if (std::abs(denominator) < 1e-12) continue;
+      const Eigen::Vector2d q = w.a - o;
+      const double t = (q.x() * e.y() - q.y() * e.x()) / denominator;
+      const double u = (q.x() * d.y() - q.y() * d.x()) / denominator;
+      if (t > 0 && u >= 0 && u <= 1) nearest = std::min(nearest, t);
+    }
+    if (nearest < 2.5)
+      points.emplace_back(static_cast<float>(nearest * std::cos(bearing)), static_cast<float>(nearest * std::sin(bearing)));
+  }
+  return points;
+}
+
+std::vector<Eigen::Vector2f> Moved(const std::vector<Eigen::Vector2f>& points, const Pose2D& pose) {
+  std::vector<Eigen::Vector2f> out;
+  for (const Eigen::Vector2f& p : points) {
+    const Pose2D q = Compose(pose, {p.x(), p.y(), 0.0});
+    out.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+  }
+  return out;
+}
+
+TEST(ScanRegistration, RecoversWhereTwoViewsOfACornerWereTakenFromAGuess) {
+  const std::vector<Segment> room = Room();
+  const Pose2D a{2.0, 0.0, 0.3}, b{2.3, 0.2, 0.45};  // both see the room's far top corner
+  // Both views in a's frame: b's from b's pose relative to a.
+  const Pose2D truth = Between(a, b);
+  const std::vector<Eigen::Vector2f> target = Boundary(room, a), source = Boundary(room, b);
+  const std::optional<ScanRegistration> r = RegisterScans(target, source, Compose(truth, {0.12, -0.08, 0.06}));
+  ASSERT_TRUE(r);
+  EXPECT_NEAR(r->pose.x, truth.x, 0.01);
+  EXPECT_NEAR(r->pose.y, truth.y, 0.01);
+  EXPECT_NEAR(r->pose.theta, truth.theta, 0.005);
+  EXPECT_LT(r->median_distance_m, 0.02);
+  EXPECT_GT(r->inlier_share, 0.6);
+  EXPECT_GT(r->weak_share(), 0.1);  // walls facing two ways fix the position both ways
+}
+
+TEST(ScanRegistration, ALoneWallFixesThePositionAcrossItOnly) {
+  std::vector<Eigen::Vector2f> wall;
+  for (int i = 0; i < 80; ++i) wall.emplace_back(0.025f * static_cast<float>(i), 1.0f);
+  const std::optional<ScanRegistration> r = RegisterScans(wall, Moved(wall, {0.1, 0.05, 0.0}), {});
+  ASSERT_TRUE(r);
+  EXPECT_LT(r->weak_share(), 0.01);
+  EXPECT_NEAR(r->walls(1, 1), 1.0, 0.01);  // normals along y: the wall runs along x
+  EXPECT_NEAR(r->pose.y, -0.05, 0.005);   // across the wall: measured
+
+  EXPECT_FALSE(RegisterScans(wall, std::vector<Eigen::Vector2f>(wall.begin(), wall.begin() + 2), {}));
+  EXPECT_FALSE(RegisterScans(wall, Moved(wall, {0.0, 2.0, 0.0}), {}));  // nothing to pair with
+}
+
+// Two laps of a loop in the room, dead-reckoned with odometry that turns 0.4% too far and drives 2%
+// short, an experience every fourth frame, the floor boundary seen from the true pose. No view
+// recognises anything: only the walls can tell that the second lap drives where the first did.
+struct TwoLaps {
+  std::unique_ptr<ExperienceMap> map;
+  std::vector<Pose2D> truth;  // of each experience
+};
+
+TwoLaps DriveTwoLaps(bool scan_links) {
+  ExperienceMapConfig config;
+  config.exp_initial_em_deg = 0;
+  config.exp_graph_optimisation = true;
+  config.exp_graph_period_frames = 10;
+  config.exp_scan_links = scan_links;
+  config.exp_scan_region = 5;
+  config.exp_scan_every = 1;
+  config.exp_scan_min_age = 40;
+  TwoLaps run{std::make_unique<ExperienceMap>(config), {}};
+  const std::vector<Segment> room = Room();
+  struct Leg {
+    int frames;
+    double vtrans, vrot;
+  };
+  const std::vector<Leg> lap = {{120, 0.25, 0}, {10, 0, kPi / 2}, {24, 0.25, 0}, {10, 0, kPi / 2},
+                                {120, 0.25, 0}, {10, 0, kPi / 2}, {24, 0.25, 0}, {10, 0, kPi / 2}};
+  Pose2D truth{0.0, -0.3, 0.0};
+  uint32_t next_id = 0;
+  int frame = 0;
+  for (int l = 0; l < 2; ++l)
+    for (const Leg& leg : lap)
+      for (int i = 0; i < leg.frames; ++i, ++frame) {
+        const double dt = 0.1;
+        truth = Compose(truth, {0.0, 0.0, leg.vrot * dt});
+        truth = Compose(truth, {leg.vtrans * dt, 0.0, 0.0});
+        run.map->Integrate(0.98 * leg.vtrans, 1.004 * leg.vrot + 0.002, dt);
+        ExperienceAction a;
+        if (frame % 4 == 0) {
+          a.kind = ExperienceAction::Kind::kCreate;
+          a.experience_id = next_id;
+          a.from_experience_id = next_id == 0 ? kNoExperience : next_id - 1;
+          a.sequence = next_id++;
+          run.truth.push_back(truth);
+        }
+        run.map->Apply(a);
+        run.map->ObserveBoundary(Boundary(room, truth));
+      }
+  run.map->OptimiseGraph(10, 1e-6);
+  return run;
+}
+
+// Mean distance of the second lap's experiences from the truth, both relative to the first
+// experience (which the least squares keeps where it is).
+double SecondLapError(const TwoLaps& run) {
+  double sum = 0;
+  int n = 0;
+  for (size_t i = run.truth.size() / 2; i < run.truth.size(); ++i, ++n) {
+    const Experience& e = run.map->experiences()[i];
+    const Pose2D truth = Between(run.truth[0], run.truth[i]);
+    sum += std::hypot(e.x_m - truth.x, e.y_m - truth.y);
+  }
+  return sum / n;
+}
+
+TEST(ScanLinks, TheSecondLapIsDrawnOnTheFirstWhereTheirWallsAgree) {
+  const TwoLaps without = DriveTwoLaps(false), with = DriveTwoLaps(true);
+  EXPECT_TRUE(without.map->scan_links().empty());
+  EXPECT_EQ(without.map->scan_registrations(), 0u);
+  ASSERT_GT(with.map->scan_links().size(), 10u);
+  for (const ScanLink& l : with.map->scan_links()) {
+    EXPECT_LT(l.link.from_id + 40, l.link.to_id + 1);  // only old stretches
+    EXPECT_NEAR(l.walls.trace(), 1.0, 1e-9);
+  }
+  const double before = SecondLapError(without), after = SecondLapError(with);
+  EXPECT_GT(before, 0.1) << "the odometry drifts";
+  EXPECT_LT(after, 0.5 * before) << before << " -> " << after;
+  // The odometric links alone are unchanged in number: scan links are not traversable links.
+  EXPECT_EQ(with.map->links().size(), without.map->links().size());
+}
+
+TEST(ScanLinks, SaveLoadKeepsTheWallsAndTheLinksAndRefusesBrokenOnes) {
+  const TwoLaps run = DriveTwoLaps(true);
+  const proto::ExperienceMap saved = run.map->Save();
+  ExperienceMap loaded(run.map->config());
+  loaded.Load(saved);
+  EXPECT_EQ(loaded.Save().SerializeAsString(), saved.SerializeAsString());
+  ASSERT_EQ(loaded.scan_links().size(), run.map->scan_links().size());
+  EXPECT_EQ(loaded.experiences()[10].scan, run.map->experiences()[10].scan);
+
+  proto::ExperienceMap odd = saved;
+  odd.mutable_experiences(3)->add_scan_xy(0.5f);  // an x without its y
+  EXPECT_THROW(loaded.Load(odd), std::invalid_argument);
+  proto::ExperienceMap unknown = saved;
+  unknown.mutable_scan_links(0)->mutable_link()->set_to_id(100000);
+  EXPECT_THROW(loaded.Load(unknown), std::invalid_argument);
+  proto::ExperienceMap nan = saved;
+  nan.mutable_scan_links(0)->set_walls_xy(std::nan(""));
+  EXPECT_THROW(loaded.Load(nan), std::invalid_argument);
+  EXPECT_EQ(loaded.Save().SerializeAsString(), saved.SerializeAsString()) << "a refused load changes nothing";
+
+  const std::vector<Eigen::Vector2f> bad = {{0.5f, std::nanf("")}};
+  EXPECT_THROW(loaded.ObserveBoundary(bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rslam::experience_map
