@@ -325,7 +325,9 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
 void ExperienceMap::ObserveBoundary(std::span<const Eigen::Vector2f> points) {
   for (const Eigen::Vector2f& p : points)
     if (!p.allFinite()) Reject("floor boundary point is not finite");
-  if (!config_.exp_scan_links || !has_current_) return;
+  // Only while the robot is still at the experience it made last: a recognised place's frame holds
+  // the walls of the visit that made it, not those a wrong recognition would put there.
+  if (!config_.exp_scan_links || !has_current_ || current_ + 1 != experiences_.size()) return;
   Experience& e = experiences_[current_];
   const Pose2D robot = Between({e.x_m, e.y_m, e.th_rad}, RobotPose());  // in the experience's frame
   const double c = std::cos(robot.theta), s = std::sin(robot.theta);

@@ -61,7 +61,7 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
     triplets.reserve((links.size() + scan_links.size()) * 36);
     Eigen::VectorXd gradient = Eigen::VectorXd::Zero(size);
     // weight: an Eigen::DiagonalMatrix (links) or a full Eigen::Matrix3d (scan links), in from's frame.
-    const auto add_link = [&](const Link& l, auto weight, bool robust) {
+    const auto add_link = [&](const Link& l, auto weight, double robust_phi) {
       const Experience& from = experiences[l.from_id];
       const Experience& to = experiences[l.to_id];
       const double c = std::cos(from.th_rad), s = std::sin(from.th_rad);
@@ -79,9 +79,9 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
       // Dynamic covariance scaling (Agarwal et al., ICRA 2013): a recognition that disagrees with
       // the rest of the map by far more than its uncertainty (a wrong loop closure) pulls on it
       // with a weight scaled by s^2, s = min(1, 2 phi / (phi + chi^2)).
-      if (robust && sigmas.closure_robust_phi > 0) {
+      if (robust_phi > 0) {
         const double chi2 = error.dot(weight * error);
-        const double scale = std::min(1.0, 2 * sigmas.closure_robust_phi / (sigmas.closure_robust_phi + chi2));
+        const double scale = std::min(1.0, 2 * robust_phi / (robust_phi + chi2));
         weight = weight * (scale * scale);
       }
       const int at[2] = {index[l.from_id], index[l.to_id]};
@@ -99,14 +99,15 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
       }
     };
     for (const Link& l : links) {
-      add_link(l, Eigen::DiagonalMatrix<double, 3>(l.closes_loop ? closure_weight : link_weight), l.closes_loop);
+      add_link(l, Eigen::DiagonalMatrix<double, 3>(l.closes_loop ? closure_weight : link_weight),
+               l.closes_loop ? sigmas.closure_robust_phi : 0.0);
     }
     for (const ScanLink& l : scan_links) {
       // Across the walls as the registration saw them (2 x walls is I for walls facing every way).
       Eigen::Matrix3d weight = Eigen::Matrix3d::Zero();
       weight.topLeftCorner<2, 2>() = 2 * l.walls / (sigmas.scan_m * sigmas.scan_m);
       weight(2, 2) = 1 / (sigmas.scan_rad * sigmas.scan_rad);
-      add_link(l.link, weight, true);
+      add_link(l.link, weight, sigmas.closure_robust_phi);
     }
     if (manhattan) {
       // A unary term on theta: every free experience has a theta diagonal entry from its links,

@@ -27,7 +27,7 @@ namespace rslam::experience_map {
 struct PoseGraphSigmas {
   double link_m, link_rad;        // odometric link
   double closure_m, closure_rad;  // link made by recognising a place
-  double closure_robust_phi = 0;   // > 0: scale down closures (and scan links) that disagree (see pose_graph.cc)
+  double closure_robust_phi = 0;   // > 0: scale down closures and scan links that disagree (see pose_graph.cc)
   double scan_m = 1, scan_rad = 1;  // scan link (the walls of two stretches registered)
 };
 

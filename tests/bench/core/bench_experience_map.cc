@@ -6,13 +6,17 @@
 // BM_ExperienceMapFrameLeastSquares corrects by least squares (pose_graph.h) every 50 frames
 // instead, and BM_ExperienceMapLeastSquaresCorrection is one such correction (2 Gauss-Newton
 // steps over the whole map); ...WithWalls the same with every experience's wall direction held to
-// the building's axes (exp_manhattan_sigma_rad).
+// the building's axes (exp_manhattan_sigma_rad). BM_RegisterScans registers two stretches' floor
+// boundaries of n points each (exp_scan_links: scan_registration.h) from a guess 0.1 m and 0.03
+// rad off, as the map does for every fifth experience that has an old one near it.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "services/experience_map/experience_map.h"
+#include "services/experience_map/scan_registration.h"
 
 namespace {
 
@@ -121,6 +125,24 @@ void RunCorrection(benchmark::State& state, bool walls) {
 void BM_ExperienceMapLeastSquaresCorrection(benchmark::State& state) { RunCorrection(state, false); }
 void BM_ExperienceMapLeastSquaresCorrectionWithWalls(benchmark::State& state) { RunCorrection(state, true); }
 
+// n points 3 cm apart along three walls of a room's corner: across 2 m ahead, 1 m to the left, and
+// a box's face 1 m to the right; the same walls seen from (0.1, 0.05, 0.03).
+void BM_RegisterScans(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  std::vector<Eigen::Vector2f> target, source;
+  for (int i = 0; i < n; ++i) {
+    const double t = 0.03 * (i / 3);
+    const Eigen::Vector2f p = i % 3 == 0 ? Eigen::Vector2f(2.0f, static_cast<float>(-1.0 + std::fmod(t, 2.0)))
+                              : i % 3 == 1 ? Eigen::Vector2f(static_cast<float>(std::fmod(t, 2.0)), 1.0f)
+                                           : Eigen::Vector2f(static_cast<float>(0.5 + std::fmod(t, 1.0)), -1.0f);
+    target.push_back(p);
+    const rslam::Pose2D q = rslam::Between({0.1, 0.05, 0.03}, {p.x(), p.y(), 0.0});
+    source.emplace_back(static_cast<float>(q.x), static_cast<float>(q.y));
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(rslam::experience_map::RegisterScans(target, source, {}));
+}
+
+BENCHMARK(BM_RegisterScans)->Arg(100)->Arg(300)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ExperienceMapFrameBudgeted)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ExperienceMapFrameFullRelaxation)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ExperienceMapFrameLeastSquares)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);

@@ -175,6 +175,36 @@ TEST(ScanLinks, TheSecondLapIsDrawnOnTheFirstWhereTheirWallsAgree) {
   EXPECT_EQ(with.map->links().size(), without.map->links().size());
 }
 
+TEST(ScanLinks, AnExperienceKeepsOnlyTheWallsOfTheVisitThatMadeIt) {
+  ExperienceMapConfig config;
+  config.exp_graph_optimisation = true;
+  config.exp_scan_links = true;
+  ExperienceMap map(config);
+  const std::vector<Eigen::Vector2f> wall = {{1.0f, -0.1f}, {1.0f, 0.0f}, {1.0f, 0.1f}, {3.0f, 0.0f}};
+  ExperienceAction create;
+  create.kind = ExperienceAction::Kind::kCreate;
+  map.ObserveBoundary(wall);  // before the first experience: nowhere to keep it
+  for (uint32_t id = 0; id < 2; ++id) {
+    create.experience_id = id;
+    create.from_experience_id = id == 0 ? kNoExperience : id - 1;
+    create.sequence = id;
+    map.Integrate(1.0, 0.0, 0.5);
+    map.Apply(create);
+    map.ObserveBoundary(wall);
+  }
+  EXPECT_EQ(map.experiences()[0].scan.size(), 3u) << "the point 3 m away is beyond exp_scan_range_m";
+  EXPECT_EQ(map.experiences()[1].scan, map.experiences()[0].scan);
+  // Back at experience 0, recognised: what the robot sees now is not kept with it.
+  ExperienceAction set;
+  set.kind = ExperienceAction::Kind::kSet;
+  set.experience_id = 0;
+  set.from_experience_id = 1;
+  set.sequence = 2;
+  map.Apply(set);
+  map.ObserveBoundary(std::vector<Eigen::Vector2f>{{0.5f, 0.5f}});
+  EXPECT_EQ(map.experiences()[0].scan.size(), 3u);
+}
+
 TEST(ScanLinks, SaveLoadKeepsTheWallsAndTheLinksAndRefusesBrokenOnes) {
   const TwoLaps run = DriveTwoLaps(true);
   const proto::ExperienceMap saved = run.map->Save();
