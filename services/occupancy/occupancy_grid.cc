@@ -145,7 +145,8 @@ int64_t OccupancyGrid::InsertProfile(const RadialObstacleProfile& profile, const
     switch (bin.status) {
       case BinStatus::kObstacle:
         if (bin.range_m <= reliable) {
-          ApplyRay(gx, gy, gx + c * bin.range_m, gy + s * bin.range_m, true, miss_table_.data());
+          const double r = HitRange(bin.range_m);
+          ApplyRay(gx, gy, gx + c * r, gy + s * r, true, miss_table_.data());
           break;
         }
         [[fallthrough]];  // an obstacle beyond the reliable range: free up to that range only

@@ -95,6 +95,10 @@ class OccupancyGrid {
   // Throws std::invalid_argument for a non-finite pose or a malformed profile.
   int64_t InsertProfile(const RadialObstacleProfile& profile, const Pose2D& robot_pose);
   void Clear();
+  // Where along its ray an obstacle seen at range_m takes its hit: half a cell past the wall's
+  // face, so of the two cells the face straddles the one holding more wall than floor is hit (the
+  // face's own cell, when the face lies in its far half, is mostly floor).
+  double HitRange(double range_m) const { return range_m + 0.5 * grid_.resolution_m; }
 
   const GridConfig& grid_config() const { return grid_; }
   const SensorModelConfig& sensor_config() const { return sensor_; }

@@ -23,13 +23,15 @@ double MatchRange(const OccupancyGrid& grid, const ProfileAlignmentConfig& confi
   return std::min(config.match_range_m, grid.sensor_config().reliable_range_m);
 }
 
-// The obstacle points within the match range, in the robot's frame.
+// The obstacle points within the match range, in the robot's frame, where the grid puts their
+// hits (OccupancyGrid::HitRange).
 std::vector<Eigen::Vector2d> MatchedPoints(const OccupancyGrid& grid, const RadialObstacleProfile& profile,
                                            const ProfileAlignmentConfig& config) {
   const double range = MatchRange(grid, config);
   std::vector<Eigen::Vector2d> points;
   profile.ObstaclePoints(points);
   std::erase_if(points, [&](const Eigen::Vector2d& p) { return p.norm() > range; });
+  for (Eigen::Vector2d& p : points) p *= grid.HitRange(p.norm()) / p.norm();
   return points;
 }
 

@@ -1,5 +1,7 @@
 #include "services/pose_cells/pose_cell_action_message.h"
 
+#include <algorithm>
+
 #include "services/templates/view_match_message.h"
 
 namespace rslam::pose_cells {
@@ -37,9 +39,17 @@ msg::PoseCellAction ToActionMessage(const Action& action, uint64_t action_seq, d
   return out;
 }
 
-FrameStep StepFrame(PoseCellNetwork& network, const msg::Header& header, const msg::Velocity* velocity, double vtrans_mps,
-                    double vrot_radps, double dt_s, const msg::ViewTemplate* view, uint64_t action_seq,
+FrameOdometry OdometryOf(const msg::Velocity* velocity, int64_t stamp_ns, const int64_t* last_stamp_ns,
+                         double max_dt_s) {
+  if (velocity) return {velocity->vtrans_mps, velocity->vrot_radps, velocity->dt_s};
+  if (!last_stamp_ns || stamp_ns <= *last_stamp_ns) return {};
+  return {0.0, 0.0, std::min(max_dt_s, static_cast<double>(stamp_ns - *last_stamp_ns) * 1e-9)};
+}
+
+FrameStep StepFrame(PoseCellNetwork& network, const msg::Header& header, const msg::Velocity* velocity,
+                    const FrameOdometry& odometry, const msg::ViewTemplate* view, uint64_t action_seq,
                     FloorBoundary& scratch) {
+  const auto [vtrans_mps, vrot_radps, dt_s] = odometry;
   // The boundary matters only to the checks and the offsets: without them nothing is converted.
   const FloorBoundary* seen = nullptr;
   const PoseCellConfig& config = network.config();

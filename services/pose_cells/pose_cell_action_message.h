@@ -16,18 +16,26 @@ namespace rslam::pose_cells {
 msg::PoseCellAction ToActionMessage(const Action& action, uint64_t action_seq, double vtrans_mps, double vrot_radps,
                                     double dt_s);
 
+// The odometry a frame integrates: its velocity's, or, when that never came, no motion over the
+// time since the last frame processed (none before the first; at most max_dt_s), so the map's links
+// still get their travel time.
+struct FrameOdometry {
+  double vtrans_mps = 0.0, vrot_radps = 0.0, dt_s = 0.0;
+};
+FrameOdometry OdometryOf(const msg::Velocity* velocity, int64_t stamp_ns, const int64_t* last_stamp_ns,
+                         double max_dt_s);
+
 // One joined frame through the network as the service processes it: the velocity's floor boundary
 // goes in when the network uses boundaries, and the action message carries the frame's header,
-// the odometry it integrated (vtrans, vrot, dt: the velocity's, or the caller's stand-in when the
-// frame's velocity never came) and the velocity's wall direction. velocity or view may be null (that
+// the odometry it integrated (OdometryOf) and the velocity's wall direction. velocity or view may be null (that
 // side of the frame never came). scratch is reused between calls. Throws std::invalid_argument as
 // PoseCellNetwork::ProcessFrame (network unchanged).
 struct FrameStep {
   Action action;
   msg::PoseCellAction message;
 };
-FrameStep StepFrame(PoseCellNetwork& network, const msg::Header& header, const msg::Velocity* velocity, double vtrans_mps,
-                    double vrot_radps, double dt_s, const msg::ViewTemplate* view, uint64_t action_seq,
+FrameStep StepFrame(PoseCellNetwork& network, const msg::Header& header, const msg::Velocity* velocity,
+                    const FrameOdometry& odometry, const msg::ViewTemplate* view, uint64_t action_seq,
                     FloorBoundary& scratch);
 
 }  // namespace rslam::pose_cells

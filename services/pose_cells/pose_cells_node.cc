@@ -154,15 +154,9 @@ class PoseCellsNode::Processor {
 
   void ProcessFrame(const Joiner::Frame& frame) {
     const msg::Header& header = frame.velocity ? frame.velocity->header : frame.view->header;
-    double vtrans = 0.0, vrot = 0.0, dt = 0.0;
-    if (frame.velocity) {
-      vtrans = frame.velocity->vtrans_mps;
-      vrot = frame.velocity->vrot_radps;
-      dt = frame.velocity->dt_s;
-    } else if (has_last_frame_ && header.stamp_ns > last_stamp_ns_) {
-      // No odometry: no motion, but the time still passed (the map's link travel times).
-      dt = std::min(config_.max_dt_s, static_cast<double>(header.stamp_ns - last_stamp_ns_) * 1e-9);
-    }
+    const msg::Velocity* velocity = frame.velocity ? &*frame.velocity : nullptr;
+    const FrameOdometry odometry =
+        OdometryOf(velocity, header.stamp_ns, has_last_frame_ ? &last_stamp_ns_ : nullptr, config_.max_dt_s);
     const msg::ViewTemplate* view = frame.view ? &*frame.view : nullptr;
     if (view && view->template_id > network_.template_count()) {
       // The template learner learns at most one template per frame, so the templates this
@@ -182,12 +176,11 @@ class PoseCellsNode::Processor {
         view = nullptr;
       }
     }
-    if (bridge_pending_) BridgeMissedFrames(frame.frame_seq, header.stamp_ns, dt);
+    if (bridge_pending_) BridgeMissedFrames(frame.frame_seq, header.stamp_ns, odometry.dt_s);
     if (relocalise_frames_left_ > 0) Relocalise(frame.frame_seq, view);
     FrameStep step;
     try {
-      step = StepFrame(network_, header, frame.velocity ? &*frame.velocity : nullptr, vtrans, vrot, dt, view,
-                       next_action_seq_, boundary_);
+      step = StepFrame(network_, header, velocity, odometry, view, next_action_seq_, boundary_);
     } catch (const std::invalid_argument& e) {
       context_.Reject("frame", e.what());
       return;
@@ -199,7 +192,7 @@ class PoseCellsNode::Processor {
       spdlog::debug("frame {}: link to experience {} refused by the floor boundaries ({} so far)", header.frame_seq,
                     step.action.refused_link_to, refused_links_);
     }
-    if (frame.velocity) mean_vtrans_mps_ += 0.1 * (vtrans - mean_vtrans_mps_);
+    if (velocity) mean_vtrans_mps_ += 0.1 * (odometry.vtrans_mps - mean_vtrans_mps_);
     has_last_frame_ = true;
     last_frame_seq_ = header.frame_seq;
     last_stamp_ns_ = header.stamp_ns;

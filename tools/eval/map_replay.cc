@@ -1,6 +1,7 @@
 #include "tools/eval/map_replay.h"
 
 #include <algorithm>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -36,8 +37,7 @@ MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config)
                                          config.occupancy.profile_alignment);
   pose_cells::FloorBoundary scratch;
   uint64_t next_action_seq = 0;
-  bool has_last_frame = false;
-  int64_t last_stamp_ns = 0;
+  std::optional<int64_t> last_stamp_ns;
   std::size_t replayed = 0;
 
   for (const RecordedFrame& frame : run.frames) {
@@ -59,23 +59,17 @@ MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config)
       action = *frame.action;
     } else {
       if (!frame.velocity && !frame.view) continue;
-      double vtrans = 0.0, vrot = 0.0, dt = 0.0;
-      if (frame.velocity) {
-        vtrans = frame.velocity->vtrans_mps;
-        vrot = frame.velocity->vrot_radps;
-        dt = frame.velocity->dt_s;
-      } else if (has_last_frame && frame.stamp_ns > last_stamp_ns) {
-        dt = std::min(config.pose_cells.max_dt_s, static_cast<double>(frame.stamp_ns - last_stamp_ns) * 1e-9);
-      }
+      const msg::Velocity* velocity = frame.velocity ? &*frame.velocity : nullptr;
+      const pose_cells::FrameOdometry odometry = pose_cells::OdometryOf(
+          velocity, frame.stamp_ns, last_stamp_ns ? &*last_stamp_ns : nullptr, config.pose_cells.max_dt_s);
       try {
-        action = pose_cells::StepFrame(network, header, frame.velocity ? &*frame.velocity : nullptr, vtrans, vrot, dt,
-                                       frame.view ? &*frame.view : nullptr, next_action_seq, scratch)
+        action = pose_cells::StepFrame(network, header, velocity, odometry, frame.view ? &*frame.view : nullptr,
+                                       next_action_seq, scratch)
                      .message;
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument("frame " + std::to_string(frame.frame_seq) + ": " + e.what());
       }
       ++next_action_seq;
-      has_last_frame = true;
       last_stamp_ns = frame.stamp_ns;
       if (frame.action) {
         ++result.actions_compared;

@@ -323,8 +323,8 @@ TEST_F(OccupancyServiceTest, TheCorrectionStillWaitingAtSigtermIsInTheGridItPubl
 
     const sim::WorldMap saved = sim::WorldMap::LoadFromYaml((state_dir_.path() / "grid.yaml").string());
     const auto at = [&saved](double x) { return saved.Classify(saved.WorldToCell({x, 0.0})); };
-    // The cell the wall's face closes (5-cm cells).
-    EXPECT_EQ(at(kWallX - 0.025), sim::CellClass::kOccupied) << "the exported grid's wall is not at 1 m";
+    // The cell just behind the wall's face, which lies on a cell border (5-cm cells): all wall.
+    EXPECT_EQ(at(kWallX + 0.025), sim::CellClass::kOccupied) << "the exported grid's wall is not at 1 m";
     EXPECT_EQ(at(kWallX + 0.475), sim::CellClass::kUnknown) << "the exported grid still has the wall at 1.5 m";
     EXPECT_EQ(at(kWallX - 0.4), sim::CellClass::kFree);
     std::filesystem::remove(state_dir_.path() / "occupancy.pb");

@@ -78,7 +78,7 @@ class MapReplayTest : public ::testing::Test {
       view.difference = view.is_new ? 0.0 : 0.01;
       view.template_count = static_cast<uint32_t>(std::min(i, lap - 1) / 2 + 1);
       f.view = view;
-      f.action = pose_cells::StepFrame(network, header, &v, v.vtrans_mps, v.vrot_radps, v.dt_s, &view,
+      f.action = pose_cells::StepFrame(network, header, &v, {v.vtrans_mps, v.vrot_radps, v.dt_s}, &view,
                                        static_cast<uint64_t>(i), scratch)
                      .message;
       msg::ObstacleProfile profile;  // floor seen free 1 m ahead, a wall at 1.2 m to the left

@@ -33,8 +33,9 @@ const Pose2D kRobot{0.25, 0.55, 0.0};
 
 TEST(OccupancyGridTest, ObstacleRayMarksFreeCellsThenOneHit) {
   OccupancyGrid grid(SmallGrid(), Model());
-  const int64_t updates = grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.4f), kRobot);
-  // From x = 0.25 to x = 0.65: cells 2..5 free, cell 6 occupied, all in row 5.
+  const int64_t updates = grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.38f), kRobot);
+  // From x = 0.25 to the wall's face at x = 0.63: cells 2..5 free, cell 6 (mostly wall) occupied,
+  // all in row 5.
   EXPECT_EQ(updates, 5);
   const double miss = LogOddsFromProbability(0.4), hit = LogOddsFromProbability(0.7);
   for (int x = 2; x <= 5; ++x) EXPECT_NEAR(grid.LogOdds({x, 5}), miss, 1e-3) << x;
@@ -42,6 +43,20 @@ TEST(OccupancyGridTest, ObstacleRayMarksFreeCellsThenOneHit) {
   EXPECT_GT(grid.Probability({6, 5}), 0.69);
   for (int x : {0, 1, 7, 8, 9}) EXPECT_FALSE(grid.IsKnown({x, 5})) << x;
   for (int y : {4, 6}) EXPECT_FALSE(grid.IsKnown({4, y}));
+}
+
+TEST(OccupancyGridTest, TheHitGoesToTheCellThatHoldsMoreWallThanFloor) {
+  // A face at x = 0.68 lies in cell 6's far half: cell 6 is mostly floor, cell 7 mostly wall.
+  OccupancyGrid grid(SmallGrid(), Model());
+  grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.43f), kRobot);
+  for (int x = 2; x <= 6; ++x) EXPECT_LT(grid.Probability({x, 5}), 0.5) << x;
+  EXPECT_GT(grid.Probability({7, 5}), 0.69);
+  EXPECT_FALSE(grid.IsKnown({8, 5}));
+  // At x = 0.62, its near half: cell 6 holds the wall.
+  OccupancyGrid near(SmallGrid(), Model());
+  near.InsertProfile(OneBin(BinStatus::kObstacle, 0.37f), kRobot);
+  EXPECT_GT(near.Probability({6, 5}), 0.69);
+  EXPECT_FALSE(near.IsKnown({7, 5}));
 }
 
 TEST(OccupancyGridTest, IgnoresObstaclesBeyondReliableRange) {
@@ -79,7 +94,7 @@ TEST(OccupancyGridTest, BlindAreaIsHalfwayBetweenUnknownAndOccupiedWithoutOverri
 
 TEST(OccupancyGridTest, ClampsAfterManyUpdatesSoTheMapCanChangeAgain) {
   OccupancyGrid grid(SmallGrid(), Model());
-  for (int i = 0; i < 200; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.4f), kRobot);
+  for (int i = 0; i < 200; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.38f), kRobot);
   EXPECT_NEAR(grid.Probability({6, 5}), 0.97, 1e-3);
   EXPECT_NEAR(grid.Probability({3, 5}), 0.12, 1e-3);
   // The obstacle goes away: the cell becomes free after a handful of misses, not hundreds.
@@ -108,16 +123,16 @@ TEST(OccupancyGridTest, RaysLeavingTheGridAreClipped) {
 }
 
 TEST(OccupancyGridTest, TheFloorUnderTheRobotStaysFreeWhateverWasSeenThere) {
-  // A wall at x = 0.65 (cell 6), seen many times from (0.25, 0.55); then the robot stands on it.
+  // A wall at x = 0.63 (cell 6), seen many times from (0.25, 0.55); then the robot stands on it.
   for (double radius : {0.0, 0.12}) {
     SensorModelConfig model = Model();
     model.footprint_radius_m = radius;
     OccupancyGrid grid(SmallGrid(), model);
-    for (int i = 0; i < 10; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.4f), kRobot);
+    for (int i = 0; i < 10; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.38f), kRobot);
     ASSERT_GT(grid.Probability({6, 5}), 0.9);
     grid.InsertProfile(OneBin(BinStatus::kUnobserved, 0.0f), {0.65, 0.55, 0.0});
     // Seen again afterwards: the footprint still wins, and only where the robot's body was.
-    for (int i = 0; i < 10; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.4f), kRobot);
+    for (int i = 0; i < 10; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.38f), kRobot);
     if (radius == 0.0) {
       EXPECT_GT(grid.Probability({6, 5}), 0.9);
       continue;
@@ -152,7 +167,7 @@ TEST(OccupancyGridTest, RejectsNonFinitePoseAndBadRanges) {
 
 TEST(OccupancyGridTest, RosCellsAndMapServerExportUseTheStandardShades) {
   OccupancyGrid grid(SmallGrid(), Model());
-  for (int i = 0; i < 5; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.4f), kRobot);
+  for (int i = 0; i < 5; ++i) grid.InsertProfile(OneBin(BinStatus::kObstacle, 0.38f), kRobot);
   const std::vector<int8_t> ros = grid.ToRosCells();
   EXPECT_EQ(ros[5 * 10 + 0], -1);
   EXPECT_LT(ros[5 * 10 + 3], 20);

@@ -143,7 +143,8 @@ TEST_P(ProfileAlignmentOnCellsOf, ARebuildAlignsAMisplacedProfileAndSearchesAgai
   ProfileAt(truth).ObstaclePoints(points);
   const Eigen::Vector2d nearest = *std::min_element(
       points.begin(), points.end(), [](const auto& a, const auto& b) { return a.norm() < b.norm(); });
-  const Pose2D short_wall = Compose(placed, {nearest.x(), nearest.y(), 0.0});
+  const Eigen::Vector2d hit = nearest * map.grid().HitRange(nearest.norm()) / nearest.norm();
+  const Pose2D short_wall = Compose(placed, {hit.x(), hit.y(), 0.0});
   const CellIndex twice = map.grid().CellOf(short_wall.x, short_wall.y);
   EXPECT_GT(as_drawn.grid().LogOdds(twice), map.grid().LogOdds(twice) + 0.5);
 
