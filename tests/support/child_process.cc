@@ -12,6 +12,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <algorithm>
 #include <stdexcept>
 #include <thread>
 
@@ -24,6 +25,22 @@ bool WaitFor(const std::function<bool()>& condition, std::chrono::milliseconds t
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
   return true;
+}
+
+bool WaitForNewMatches(const std::vector<std::function<int()>>& counts, std::chrono::milliseconds timeout) {
+  std::vector<int> lowest;
+  for (const auto& count : counts) lowest.push_back(count());
+  return WaitFor(
+      [&] {
+        bool all = true;
+        for (size_t i = 0; i < counts.size(); ++i) {
+          const int now = counts[i]();
+          lowest[i] = std::min(lowest[i], now);
+          all = all && now > lowest[i];
+        }
+        return all;
+      },
+      timeout);
 }
 
 ScratchFolder::ScratchFolder(const std::string& prefix) {

@@ -27,6 +27,11 @@ namespace rslam::testing {
 // Polls condition every few milliseconds until it holds or timeout passes; returns whether it held.
 bool WaitFor(const std::function<bool()>& condition, std::chrono::milliseconds timeout);
 
+// Waits until each count (matched endpoints of a test's publisher or subscriber) rises above the
+// lowest it has shown since the call: a process started just before has matched, whether or not
+// one that just exited is still counted when the call begins (it may leave meanwhile).
+bool WaitForNewMatches(const std::vector<std::function<int()>>& counts, std::chrono::milliseconds timeout);
+
 // A fresh temporary folder (under $TMPDIR), removed with everything in it with the object.
 class ScratchFolder {
  public:

@@ -26,6 +26,7 @@ using namespace std::chrono_literals;
 using testing::ChildProcess;
 using testing::ScratchFolder;
 using testing::WaitFor;
+using testing::WaitForNewMatches;
 
 const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-explorer";
 
@@ -90,15 +91,11 @@ class ExplorerServiceTest : public ::testing::Test {
                                   "--set", "service.heartbeat_period_s=0.2", "--set",
                                   "explorer.fresh_grid_timeout_s=0.3"};
     args.insert(args.end(), extra.begin(), extra.end());
-    const int poses = pose_pub_->MatchedSubscribers(), feedback = feedback_pub_->MatchedSubscribers();
-    const int commands = command_sub_->MatchedPublishers();
     auto process = std::make_unique<ChildProcess>(kBinary, args);
-    const bool matched = WaitFor(
-        [&] {
-          return pose_pub_->MatchedSubscribers() > poses && feedback_pub_->MatchedSubscribers() > feedback &&
-                 command_sub_->MatchedPublishers() > commands;
-        },
-        10s);
+    const bool matched = WaitForNewMatches({[&] { return pose_pub_->MatchedSubscribers(); },
+                                            [&] { return feedback_pub_->MatchedSubscribers(); },
+                                            [&] { return command_sub_->MatchedPublishers(); }},
+                                           10s);
     EXPECT_TRUE(matched) << process->Output();
     return process;
   }
@@ -353,6 +350,8 @@ TEST_F(ExplorerServiceTest, StoppingCancelsTheCommandAndRestartKeepsNumberingUpw
     }));
   }
   EXPECT_TRUE(std::filesystem::exists(state_dir_.path() / "explorer.pb"));
+  // A clean exit: its readers and writer leave at once.
+  EXPECT_TRUE(WaitFor([&] { return pose_pub_->MatchedSubscribers() == 0 && command_sub_->MatchedPublishers() == 0; }, 5s));
   auto restarted = Start();
   pose_pub_->Publish(RobotAt(0, 0, 0));  // the grid comes again from the state topic
   const auto command = NextCommand();

@@ -32,6 +32,7 @@ using namespace std::chrono_literals;
 using testing::ChildProcess;
 using testing::ScratchFolder;
 using testing::WaitFor;
+using testing::WaitForNewMatches;
 
 const std::string kBinary = RSLAM_BINARY_DIR "/bin/rslam-occupancy";
 constexpr double kWallX = 1.0;  // the wall's face, metres ahead of the robot at the origin
@@ -79,17 +80,14 @@ class OccupancyServiceTest : public ::testing::Test {
                                   "--set", "service.heartbeat_period_s=0.2", "--set",
                                   "service.state_save_period_s=0.3"};
     args.insert(args.end(), extra.begin(), extra.end());
-    // A killed predecessor stays matched until its lease expires: count the new process on top.
-    const int images = image_pub_->MatchedSubscribers(), poses = pose_pub_->MatchedSubscribers();
-    const int profiles = profile_sub_->MatchedPublishers(), grids = grid_sub_->MatchedPublishers();
+    // Up when its publishers and subscribers have matched ours (a killed predecessor stays matched
+    // until its lease expires).
     auto process = std::make_unique<ChildProcess>(kBinary, args);
-    // Up when its publishers and subscribers have matched ours.
-    const bool matched = WaitFor(
-        [&] {
-          return image_pub_->MatchedSubscribers() > images && pose_pub_->MatchedSubscribers() > poses &&
-                 profile_sub_->MatchedPublishers() > profiles && grid_sub_->MatchedPublishers() > grids;
-        },
-        10s);
+    const bool matched = WaitForNewMatches({[&] { return image_pub_->MatchedSubscribers(); },
+                                            [&] { return pose_pub_->MatchedSubscribers(); },
+                                            [&] { return profile_sub_->MatchedPublishers(); },
+                                            [&] { return grid_sub_->MatchedPublishers(); }},
+                                           10s);
     EXPECT_TRUE(matched) << process->Output();
     return process;
   }
