@@ -31,7 +31,7 @@ std::vector<Eigen::Vector2d> MatchedPoints(const OccupancyGrid& grid, const Radi
   std::vector<Eigen::Vector2d> points;
   profile.ObstaclePoints(points);
   std::erase_if(points, [&](const Eigen::Vector2d& p) { return p.norm() > range; });
-  for (Eigen::Vector2d& p : points) p *= grid.HitRange(p.norm()) / p.norm();
+  for (Eigen::Vector2d& p : points) p = p.normalized() * grid.HitRange(p.norm());
   return points;
 }
 

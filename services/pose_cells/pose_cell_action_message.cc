@@ -39,7 +39,7 @@ msg::PoseCellAction ToActionMessage(const Action& action, uint64_t action_seq, d
   return out;
 }
 
-FrameOdometry OdometryOf(const msg::Velocity* velocity, int64_t stamp_ns, const int64_t* last_stamp_ns,
+FrameOdometry OdometryOf(const msg::Velocity* velocity, int64_t stamp_ns, std::optional<int64_t> last_stamp_ns,
                          double max_dt_s) {
   if (velocity) return {velocity->vtrans_mps, velocity->vrot_radps, velocity->dt_s};
   if (!last_stamp_ns || stamp_ns <= *last_stamp_ns) return {};

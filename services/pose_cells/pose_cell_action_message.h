@@ -4,6 +4,7 @@
 // drift.
 
 #include <cstdint>
+#include <optional>
 
 #include "rslam/msg/all_messages.h"
 #include "services/pose_cells/pose_cell_action.h"
@@ -22,13 +23,13 @@ msg::PoseCellAction ToActionMessage(const Action& action, uint64_t action_seq, d
 struct FrameOdometry {
   double vtrans_mps = 0.0, vrot_radps = 0.0, dt_s = 0.0;
 };
-FrameOdometry OdometryOf(const msg::Velocity* velocity, int64_t stamp_ns, const int64_t* last_stamp_ns,
+FrameOdometry OdometryOf(const msg::Velocity* velocity, int64_t stamp_ns, std::optional<int64_t> last_stamp_ns,
                          double max_dt_s);
 
 // One joined frame through the network as the service processes it: the velocity's floor boundary
 // goes in when the network uses boundaries, and the action message carries the frame's header,
-// the odometry it integrated (OdometryOf) and the velocity's wall direction. velocity or view may be null (that
-// side of the frame never came). scratch is reused between calls. Throws std::invalid_argument as
+// the odometry it integrated (OdometryOf) and the velocity's wall direction. velocity or view may
+// be null (that side of the frame never came). scratch is reused between calls. Throws std::invalid_argument as
 // PoseCellNetwork::ProcessFrame (network unchanged).
 struct FrameStep {
   Action action;

@@ -156,7 +156,8 @@ class PoseCellsNode::Processor {
     const msg::Header& header = frame.velocity ? frame.velocity->header : frame.view->header;
     const msg::Velocity* velocity = frame.velocity ? &*frame.velocity : nullptr;
     const FrameOdometry odometry =
-        OdometryOf(velocity, header.stamp_ns, has_last_frame_ ? &last_stamp_ns_ : nullptr, config_.max_dt_s);
+        OdometryOf(velocity, header.stamp_ns, has_last_frame_ ? std::optional(last_stamp_ns_) : std::nullopt,
+                   config_.max_dt_s);
     const msg::ViewTemplate* view = frame.view ? &*frame.view : nullptr;
     if (view && view->template_id > network_.template_count()) {
       // The template learner learns at most one template per frame, so the templates this

@@ -127,8 +127,7 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
     const std::string recording = summary["recording"].get<std::string>();
     ASSERT_TRUE(fs::exists(recording));
     // The recording builds the run's map again through the services' libraries (`rslam eval map`):
-    // the pose cells give back the recorded actions, and the map is the one the services built (the
-    // last frame or two may have reached the recorder and not the map before the services stopped).
+    // the pose cells give back the recorded actions, and the map is the one the services built.
     // On a loaded machine a view may reach the pose cells after its frame went on without it (one
     // action of 12,140 in a CI run): the replay, which pairs every view with its frame, makes that
     // action with it; the later actions are the same again.
@@ -141,7 +140,11 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
     EXPECT_GT(replayed["actions_compared"].get<int64_t>(), summary["frames"].get<int64_t>() - 10) << replayed.dump(2);
     EXPECT_LE(replayed["actions_differing"].get<int64_t>(), replayed["actions_compared"].get<int64_t>() / 1000)
         << replayed.dump(2);
-    EXPECT_NEAR(replayed["experiences"].get<double>(), summary["experiences"].get<double>(), 2);
+    // The live figure is the experience map's last published map (every map_publish_period_frames,
+    // 10, actions), and the services stop together while actions are still in flight: the replay,
+    // which applies every recorded action, may have a few experiences more (6 in a loaded run).
+    EXPECT_GE(replayed["experiences"].get<int64_t>(), summary["experiences"].get<int64_t>() - 2) << replayed.dump(2);
+    EXPECT_LE(replayed["experiences"].get<int64_t>(), summary["experiences"].get<int64_t>() + 10) << replayed.dump(2);
     EXPECT_NEAR(replayed["ate_m"].get<double>(), summary["ate_m"].get<double>(), 0.01);
     EXPECT_NEAR(replayed["coverage"].get<double>(), summary["coverage"].get<double>(), 0.02);
   }

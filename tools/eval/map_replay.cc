@@ -60,8 +60,8 @@ MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config)
     } else {
       if (!frame.velocity && !frame.view) continue;
       const msg::Velocity* velocity = frame.velocity ? &*frame.velocity : nullptr;
-      const pose_cells::FrameOdometry odometry = pose_cells::OdometryOf(
-          velocity, frame.stamp_ns, last_stamp_ns ? &*last_stamp_ns : nullptr, config.pose_cells.max_dt_s);
+      const pose_cells::FrameOdometry odometry =
+          pose_cells::OdometryOf(velocity, frame.stamp_ns, last_stamp_ns, config.pose_cells.max_dt_s);
       try {
         action = pose_cells::StepFrame(network, header, velocity, odometry, frame.view ? &*frame.view : nullptr,
                                        next_action_seq, scratch)
