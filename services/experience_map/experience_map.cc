@@ -178,10 +178,14 @@ void ExperienceMap::SetCurrent(uint32_t id, const ExperienceAction& a) {
 }
 
 bool ExperienceMap::RefusesRecognition(const ExperienceAction& a) const {
-  if (config_.exp_recognition_max_jump_m <= 0) return false;
   const Experience& e = experiences_[a.experience_id];
-  const Pose2D placed = Compose({e.x_m, e.y_m, e.th_rad}, {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
   const Pose2D robot = RobotPose();
+  const bool takes_angle = a.kind == ExperienceAction::Kind::kLink || config_.exp_set_view_angle;
+  if (config_.exp_recognition_max_turn_rad > 0 && takes_angle &&
+      std::abs(WrapAngle(e.th_rad + a.relative_angle_rad - robot.theta)) > config_.exp_recognition_max_turn_rad)
+    return true;
+  if (config_.exp_recognition_max_jump_m <= 0) return false;
+  const Pose2D placed = Compose({e.x_m, e.y_m, e.th_rad}, {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
   const double jump = std::hypot(placed.x - robot.x, placed.y - robot.y);
   return jump > config_.exp_recognition_max_jump_m + config_.exp_recognition_jump_per_m * driven_since_recognition_m_;
 }
@@ -398,8 +402,33 @@ void ExperienceMap::TryScanLink(uint32_t a) {
   scan.link.heading_rad = std::atan2(r->pose.y, r->pose.x);
   scan.link.facing_rad = r->pose.theta;
   scan.walls = r->walls;
+  if (config_.exp_scan_confirm_ids > 0) {
+    const bool confirmed = last_scan_ &&
+                           a - last_scan_->link.to_id <= static_cast<uint32_t>(config_.exp_scan_confirm_ids) &&
+                           ScanLinksAgree(*last_scan_, scan);
+    if (confirmed && !last_scan_kept_) scan_links_.push_back(*last_scan_);
+    last_scan_ = scan;
+    last_scan_kept_ = confirmed;
+    if (!confirmed) return;
+  }
   scan_links_.push_back(scan);
   graph_pending_ = true;
+}
+
+bool ExperienceMap::ScanLinksAgree(const ScanLink& a, const ScanLink& b) const {
+  const auto pose = [this](uint32_t id) {
+    const Experience& e = experiences_[id];
+    return Pose2D{e.x_m, e.y_m, e.th_rad};
+  };
+  const auto measured = [](const Link& l) {
+    return Pose2D{l.d_m * std::cos(l.heading_rad), l.d_m * std::sin(l.heading_rad), l.facing_rad};
+  };
+  // b's newer end in a's older end's frame: through a's measurement and the map's newer stretch,
+  // and through the map's older stretch and b's measurement.
+  const Pose2D via_a = Compose(measured(a.link), Between(pose(a.link.to_id), pose(b.link.to_id)));
+  const Pose2D via_b = Compose(Between(pose(a.link.from_id), pose(b.link.from_id)), measured(b.link));
+  return std::hypot(via_a.x - via_b.x, via_a.y - via_b.y) <= config_.exp_scan_confirm_m &&
+         std::abs(WrapAngle(via_a.theta - via_b.theta)) <= config_.exp_scan_confirm_rad;
 }
 
 PoseGraphResult ExperienceMap::OptimiseGraph(int iterations, double stop_below) {
@@ -767,6 +796,7 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
     links_to_[p.to_id()].push_back(i);
   }
   scan_links_.clear();
+  last_scan_.reset();
   for (const auto& p : m.scan_links()) {
     const proto::Link& l = p.link();
     ScanLink& scan = scan_links_.emplace_back();

@@ -205,6 +205,9 @@ class ExperienceMap {
   // exp_scan_links: registers the stretch around experience `a` with the one around the nearest
   // old experience in the map, and keeps a scan link when they agree.
   void TryScanLink(uint32_t a);
+  // exp_scan_confirm_ids: the loop scan links a and b close with the map's placement of their ends
+  // is within exp_scan_confirm_m / _rad.
+  bool ScanLinksAgree(const ScanLink& a, const ScanLink& b) const;
   // The scan points of experiences [centre - exp_scan_region, centre + exp_scan_region] (those
   // below `end`), placed in centre's frame as the map has them, one per cell.
   std::vector<Eigen::Vector2f> StretchPoints(uint32_t centre, uint32_t end) const;
@@ -256,6 +259,10 @@ class ExperienceMap {
   uint64_t heading_recaptures_ = 0;
   std::vector<ScanLink> scan_links_;
   uint64_t scan_registrations_ = 0;  // not saved
+  // exp_scan_confirm_ids: the latest registration kept or waiting for another to confirm it, and
+  // whether it is kept. Not saved: a loaded map waits for two again.
+  std::optional<ScanLink> last_scan_;
+  bool last_scan_kept_ = false;
   bool graph_pending_ = false;    // links changed since the last least-squares correction
   int frames_since_graph_ = 0;
 };

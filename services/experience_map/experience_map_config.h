@@ -62,9 +62,12 @@ struct ExperienceMapConfig {
   // stays where the map has it (and its next experience links from the map's current one). A
   // place seen twice looks alike (a corner, a stretch of wall) however far apart the two are;
   // the map, corrected at every recognition, knows the robot to within its drift since the last.
-  // 0: every recognition is taken.
+  // 0: every recognition is taken. Likewise one whose facing (the experience's plus the view's
+  // relative angle; a kSet's only with exp_set_view_angle) is more than exp_recognition_max_turn_rad
+  // from the robot's (0: any).
   double exp_recognition_max_jump_m = 0.0;
   double exp_recognition_jump_per_m = 0.0;
+  double exp_recognition_max_turn_rad = 0.0;
   // The robot's heading held to the building's walls (ExperienceMap::HoldHeading): most walls run
   // along two perpendicular directions (the Manhattan-world assumption). The first
   // exp_manhattan_reference_frames wall directions the odometry reports fix those axes in the
@@ -107,6 +110,13 @@ struct ExperienceMapConfig {
   // in the least squares (sigmas exp_graph_scan_sigma_m / _rad, the closures' robust kernel): the
   // same walls seen on two visits are drawn in one place whether or not a view recognised it. Scan
   // links are never traversed, and are not among the map's links.
+  //
+  // With exp_scan_confirm_ids > 0 a registration waits until another confirms it: one made
+  // around an experience at most that many ids later whose measurement closes the loop the two
+  // make with the map's placement of their ends within exp_scan_confirm_m / _rad. Right
+  // registrations come in runs along a revisited wall and agree; a wall matched to its neighbour
+  // stands alone. Once a run is confirmed each next registration that agrees with its last link
+  // is kept at once.
   bool exp_scan_links = false;
   double exp_scan_range_m = 2.0;
   int exp_scan_region = 15;
@@ -119,6 +129,9 @@ struct ExperienceMapConfig {
   double exp_scan_min_weak_share = 0.1;
   double exp_scan_max_correction_m = 0.5;
   double exp_scan_max_correction_rad = 0.2;
+  int exp_scan_confirm_ids = 0;
+  double exp_scan_confirm_m = 0.1;
+  double exp_scan_confirm_rad = 0.05;
   double exp_graph_scan_sigma_m = 0.05;
   double exp_graph_scan_sigma_rad = 0.01;
 
@@ -154,6 +167,8 @@ struct ExperienceMapConfig {
       "> 0: a recognition that would move the robot farther than this from where the map has it is refused (m)");
     v("exp_recognition_jump_per_m", exp_recognition_jump_per_m,
       "... plus this for each metre driven since the last recognition taken");
+    v("exp_recognition_max_turn_rad", exp_recognition_max_turn_rad,
+      "> 0: a recognition that would turn the robot's facing by more than this is refused (rad)");
     v("exp_manhattan", exp_manhattan, "hold the robot's heading to the walls' two perpendicular directions");
     v("exp_manhattan_reference_frames", exp_manhattan_reference_frames, "wall directions that fix the axes at the start");
     v("exp_manhattan_min_offset_rad", exp_manhattan_min_offset_rad,
@@ -189,6 +204,10 @@ struct ExperienceMapConfig {
       "... walls facing enough ways to fix the pose along them (0: one straight wall, 0.5: every way)");
     v("exp_scan_max_correction_m", exp_scan_max_correction_m, "... and a move of the map's guess within this (m)");
     v("exp_scan_max_correction_rad", exp_scan_max_correction_rad, "... and a turn within this (rad)");
+    v("exp_scan_confirm_ids", exp_scan_confirm_ids,
+      "> 0: a registration is kept once another around an experience at most this many ids later agrees with it");
+    v("exp_scan_confirm_m", exp_scan_confirm_m, "... closing the loop of the two and the map within this (m)");
+    v("exp_scan_confirm_rad", exp_scan_confirm_rad, "... and this (rad)");
     v("exp_graph_scan_sigma_m", exp_graph_scan_sigma_m, "uncertainty of a scan link's position (m)");
     v("exp_graph_scan_sigma_rad", exp_graph_scan_sigma_rad, "uncertainty of a scan link's facing (rad)");
   }
@@ -215,6 +234,9 @@ struct ExperienceMapConfig {
             "exp_recognition_max_jump_m", "must be >= 0");
     Require(std::isfinite(exp_recognition_jump_per_m) && exp_recognition_jump_per_m >= 0,
             "exp_recognition_jump_per_m", "must be >= 0");
+    Require(std::isfinite(exp_recognition_max_turn_rad) && exp_recognition_max_turn_rad >= 0 &&
+                exp_recognition_max_turn_rad <= std::numbers::pi,
+            "exp_recognition_max_turn_rad", "must be in [0, pi]");
     Require(exp_manhattan_reference_frames >= 1, "exp_manhattan_reference_frames", "must be at least 1");
     Require(std::isfinite(exp_manhattan_max_offset_rad) && exp_manhattan_max_offset_rad > 0 &&
                 exp_manhattan_max_offset_rad < std::numbers::pi / 4,
@@ -254,6 +276,9 @@ struct ExperienceMapConfig {
             "must be positive");
     Require(std::isfinite(exp_scan_max_correction_rad) && exp_scan_max_correction_rad > 0,
             "exp_scan_max_correction_rad", "must be positive");
+    Require(exp_scan_confirm_ids >= 0, "exp_scan_confirm_ids", "must be non-negative");
+    Require(std::isfinite(exp_scan_confirm_m) && exp_scan_confirm_m > 0, "exp_scan_confirm_m", "must be positive");
+    Require(std::isfinite(exp_scan_confirm_rad) && exp_scan_confirm_rad > 0, "exp_scan_confirm_rad", "must be positive");
     Require(exp_graph_scan_sigma_m > 0, "exp_graph_scan_sigma_m", "must be positive");
     Require(exp_graph_scan_sigma_rad > 0, "exp_graph_scan_sigma_rad", "must be positive");
   }

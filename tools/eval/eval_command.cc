@@ -290,7 +290,10 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
     json["actions_compared"] = r.actions_compared;
     json["actions_differing"] = r.actions_differing;
     json["profiles_kept"] = r.profiles_kept;
-    json["scan_links"] = {{"registered", r.scan_registrations}, {"kept", r.scan_links}};
+    nlohmann::json judged = nlohmann::json::array();
+    for (const ScanLinkError& e : JudgeScanLinks(r.scan_links, demo::ExperienceGroundTruth(r.seen)))
+      judged.push_back({{"from", e.from_id}, {"to", e.to_id}, {"position_m", e.position_m}, {"heading_rad", e.heading_rad}});
+    json["scan_links"] = {{"registered", r.scan_registrations}, {"kept", r.scan_links.size()}, {"against_truth", judged}};
     json["skipped_channels"] = run.skipped;
     if (!options.out_dir.empty()) {
       const std::filesystem::path dir(options.out_dir);

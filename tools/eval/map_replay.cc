@@ -1,6 +1,7 @@
 #include "tools/eval/map_replay.h"
 
 #include <algorithm>
+#include <cmath>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -123,8 +124,23 @@ MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config)
   seen.link_count = static_cast<uint32_t>(final_map.links.size());
   seen.map = std::move(final_map);
   result.scan_registrations = map.scan_registrations();
-  result.scan_links = map.scan_links().size();
+  result.scan_links = map.scan_links();
   return result;
+}
+
+std::vector<ScanLinkError> JudgeScanLinks(std::span<const experience_map::ScanLink> links,
+                                          const std::map<uint32_t, Pose2D>& experience_truth) {
+  std::vector<ScanLinkError> out;
+  for (const experience_map::ScanLink& s : links) {
+    const auto from = experience_truth.find(s.link.from_id), to = experience_truth.find(s.link.to_id);
+    if (from == experience_truth.end() || to == experience_truth.end()) continue;
+    const Pose2D truth = Between(from->second, to->second);
+    const Pose2D measured{s.link.d_m * std::cos(s.link.heading_rad), s.link.d_m * std::sin(s.link.heading_rad),
+                          s.link.facing_rad};
+    out.push_back({s.link.from_id, s.link.to_id, std::hypot(measured.x - truth.x, measured.y - truth.y),
+                   std::abs(WrapAngle(measured.theta - truth.theta))});
+  }
+  return out;
 }
 
 }  // namespace rslam::eval

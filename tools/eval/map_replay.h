@@ -16,7 +16,11 @@
 // Pure and deterministic: the caller reads the recording and the config.
 
 #include <cstddef>
+#include <map>
+#include <span>
+#include <vector>
 
+#include "services/experience_map/experience_map.h"
 #include "services/experience_map/experience_map_node_config.h"
 #include "services/occupancy/occupancy_node_config.h"
 #include "services/pose_cells/pose_cells_node_config.h"
@@ -41,8 +45,21 @@ struct MapReplayResult {
   std::size_t actions_compared = 0;   // replayed actions with a recorded one for their frame
   std::size_t actions_differing = 0;  // ... that differ from it (kind, ids, offsets, angle, odometry)
   std::size_t profiles_kept = 0;      // drawn into the grid (the others added nothing new)
-  std::size_t scan_registrations = 0, scan_links = 0;  // experience_map.exp_scan_links
+  // experience_map.exp_scan_links: registrations tried, and the links kept (the newer
+  // experience's pose in the older's, as measured).
+  std::size_t scan_registrations = 0;
+  std::vector<experience_map::ScanLink> scan_links;
 };
+
+// A scan link judged against the truth: its measurement against the true pose of its newer
+// experience in its older's frame (ExperienceGroundTruth).
+struct ScanLinkError {
+  uint32_t from_id = 0, to_id = 0;
+  double position_m = 0.0, heading_rad = 0.0;
+};
+// The links whose two ends have a ground-truth pose, in the map's order.
+std::vector<ScanLinkError> JudgeScanLinks(std::span<const experience_map::ScanLink> links,
+                                          const std::map<uint32_t, Pose2D>& experience_truth);
 
 // Throws std::invalid_argument when the run has no frame to replay (no velocity or view, or with
 // recorded_actions no action) or a frame's message is one the service would refuse.

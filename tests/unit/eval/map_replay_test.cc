@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -190,6 +191,26 @@ TEST_F(MapReplayTest, CountsActionsThatDifferAndRefusesAnEmptyRun) {
   EXPECT_THROW(ReplayMap(empty, config_), std::invalid_argument);
 }
 
+TEST(JudgeScanLinks, MeasuresEachLinkAgainstItsEndsTrueRelativePose) {
+  // Experience 3 truly 1 m ahead of 0 and turned a quarter; the link measures it 1.3 m ahead,
+  // turned 0.1 rad less. Experience 7 has no truth: its link is left out.
+  const std::map<uint32_t, Pose2D> truth = {{0, {2.0, 1.0, std::numbers::pi / 2}},
+                                            {3, {2.0, 2.0, std::numbers::pi}}};
+  experience_map::ScanLink right, wrong;
+  right.link = {0, 3, 1.0, 0.0, std::numbers::pi / 2};
+  wrong.link = {0, 3, 1.3, 0.0, std::numbers::pi / 2 - 0.1};
+  experience_map::ScanLink unknown = right;
+  unknown.link.to_id = 7;
+  const std::vector<experience_map::ScanLink> links = {right, unknown, wrong};
+  const std::vector<ScanLinkError> judged = JudgeScanLinks(links, truth);
+  ASSERT_EQ(judged.size(), 2u);
+  EXPECT_NEAR(judged[0].position_m, 0.0, 1e-12);
+  EXPECT_NEAR(judged[0].heading_rad, 0.0, 1e-12);
+  EXPECT_EQ(judged[1].to_id, 3u);
+  EXPECT_NEAR(judged[1].position_m, 0.3, 1e-12);
+  EXPECT_NEAR(judged[1].heading_rad, 0.1, 1e-12);
+}
+
 TEST_F(MapReplayTest, EvalMapReplaysARecordingAndJudgesItAsTheDemoDoes) {
   const std::string path = WriteRecording();
   const auto json = nlohmann::json::parse(RunRslam({"eval", "map", path, "--json", "--out", (dir_ / "out").string()}));
@@ -201,6 +222,7 @@ TEST_F(MapReplayTest, EvalMapReplaysARecordingAndJudgesItAsTheDemoDoes) {
   for (const char* key : {"coverage", "map_precision", "experiences", "links", "loop_closures",
                           "loop_closure_precision", "ate_m", "ate_odometry_m", "grid"})
     EXPECT_TRUE(json.contains(key)) << key;
+  EXPECT_EQ(json["scan_links"]["against_truth"].size(), json["scan_links"]["kept"].get<size_t>());
   EXPECT_GT(json["coverage"].get<double>(), 0.0);
   // The odometry here is the truth, so the map's error is small.
   EXPECT_LT(json["ate_odometry_m"].get<double>(), 1e-6);

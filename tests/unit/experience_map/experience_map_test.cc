@@ -747,6 +747,54 @@ TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
                      {"exp_recognition_jump_per_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_per_m = NAN; }}});
 }
 
+TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
+  ExperienceMapConfig config;
+  config.exp_initial_em_deg = 0;
+  config.exp_recognition_max_turn_rad = 0.5;
+  config.exp_relax_budget_links = 0;
+  config.exp_loops = 0;
+  ExperienceMap map(config);
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(1, 0));
+  map.Integrate(0.0, kPi / 2, 1.0);
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(2, 1));  // at (1, 1) facing +y
+  map.Integrate(0.0, kPi / 2, 1.0);
+  map.Integrate(1.0, 0.0, 1.0);  // at (0, 1) facing -x
+
+  // Experience 0 seen facing as it was made (+x): a half turn from the robot's facing. Refused,
+  // the robot's pose unchanged.
+  ExperienceAction half_turn = LinkTo(Kind::kLink, 2, 0);
+  map.Apply(half_turn);
+  EXPECT_EQ(map.refused_recognitions(), 1u);
+  EXPECT_EQ(map.current_id(), 2u);
+  EXPECT_EQ(map.pose_cells_current(), std::optional<uint32_t>(0));
+  EXPECT_NEAR(map.RobotPose().theta, kPi, 1e-9);
+
+  // Seen at a relative angle that puts the robot within 0.5 rad of its facing: taken.
+  ExperienceAction facing = LinkTo(Kind::kLink, 0, 0);
+  facing.experience_id = 1;
+  facing.relative_angle_rad = kPi - 0.4;
+  map.Apply(facing);
+  EXPECT_EQ(map.refused_recognitions(), 1u);
+  EXPECT_EQ(map.current_id(), 1u);
+  EXPECT_NEAR(map.RobotPose().theta, kPi - 0.4, 1e-9);
+
+  // A set (a transition along a link) is turned only with exp_set_view_angle.
+  map.Integrate(0.0, kPi, 1.0);  // facing -0.4 rad; experience 2 faces +y
+  map.Apply(LinkTo(Kind::kSet, 1, 2));
+  EXPECT_EQ(map.refused_recognitions(), 2u);
+  config.exp_set_view_angle = false;
+  ExperienceMap unturned(config);
+  unturned.Load(map.Save());
+  unturned.Apply(LinkTo(Kind::kSet, 2, 2));
+  EXPECT_EQ(unturned.current_id(), 2u);
+  EXPECT_NEAR(unturned.RobotPose().theta, -0.4, 1e-9);
+
+  ExpectKeysRefused(config, {{"exp_recognition_max_turn_rad", [](ExperienceMapConfig& c) { c.exp_recognition_max_turn_rad = 4; }}});
+}
+
 TEST(ExperienceMap, HeadingThatDriftedPastTheGateIsTakenBackWhenTheWallsAgreeOnIt) {
   // Heading 0.4 rad off the axes, past the gate's 0.3: walls on the axes all come 0.4 off.
   ExperienceMapConfig config = HeldToWalls();

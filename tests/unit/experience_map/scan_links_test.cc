@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -104,7 +105,14 @@ struct TwoLaps {
   std::vector<Pose2D> truth;  // of each experience
 };
 
-TwoLaps DriveTwoLaps(bool scan_links) {
+// A lookalike: while these experiences are made the walls are seen as from 0.3 m to the robot's
+// left (a wall matched to its neighbour).
+struct Lookalike {
+  uint32_t first = 0, last = 0;
+};
+
+TwoLaps DriveTwoLaps(bool scan_links, const std::function<void(ExperienceMapConfig&)>& configure = {},
+                     std::optional<Lookalike> lookalike = std::nullopt) {
   ExperienceMapConfig config;
   config.exp_initial_em_deg = 0;
   config.exp_graph_optimisation = true;
@@ -113,6 +121,7 @@ TwoLaps DriveTwoLaps(bool scan_links) {
   config.exp_scan_region = 5;
   config.exp_scan_every = 1;
   config.exp_scan_min_age = 40;
+  if (configure) configure(config);
   TwoLaps run{std::make_unique<ExperienceMap>(config), {}};
   const std::vector<Segment> room = Room();
   struct Leg {
@@ -140,7 +149,8 @@ TwoLaps DriveTwoLaps(bool scan_links) {
           run.truth.push_back(truth);
         }
         run.map->Apply(a);
-        run.map->ObserveBoundary(Boundary(room, truth));
+        const bool fooled = lookalike && next_id > lookalike->first && next_id <= lookalike->last + 1;
+        run.map->ObserveBoundary(Boundary(room, fooled ? Compose(truth, {0.0, 0.3, 0.0}) : truth));
       }
   run.map->OptimiseGraph(10, 1e-6);
   return run;
@@ -173,6 +183,39 @@ TEST(ScanLinks, TheSecondLapIsDrawnOnTheFirstWhereTheirWallsAgree) {
   EXPECT_LT(after, 0.5 * before) << before << " -> " << after;
   // The odometric links alone are unchanged in number: scan links are not traversable links.
   EXPECT_EQ(with.map->links().size(), without.map->links().size());
+}
+
+// The kept scan links' largest error against the truth of their experiences (m).
+double WorstScanLink(const TwoLaps& run) {
+  double worst = 0;
+  for (const ScanLink& l : run.map->scan_links()) {
+    const Pose2D truth = Between(run.truth[l.link.from_id], run.truth[l.link.to_id]);
+    worst = std::max(worst, std::hypot(l.link.d_m * std::cos(l.link.heading_rad) - truth.x,
+                                       l.link.d_m * std::sin(l.link.heading_rad) - truth.y));
+  }
+  return worst;
+}
+
+TEST(ScanLinks, ARegistrationNoOtherConfirmsIsNotKept) {
+  const auto every_fifth = [](ExperienceMapConfig& c) { c.exp_scan_every = 5; };
+  const auto confirmed = [](ExperienceMapConfig& c) {
+    c.exp_scan_every = 5;
+    c.exp_scan_confirm_ids = 10;
+  };
+  const Lookalike lookalike{90, 100};  // in the second lap, one stretch's worth
+  const TwoLaps fooled = DriveTwoLaps(true, every_fifth, lookalike);
+  const TwoLaps checked = DriveTwoLaps(true, confirmed, lookalike);
+  EXPECT_GT(WorstScanLink(fooled), 0.15) << "the lookalike registers";
+  EXPECT_LT(WorstScanLink(checked), 0.1);
+  ASSERT_GE(checked.map->scan_links().size(), 3u) << "the rest confirm each other";
+
+  // A window too short for the next registration to confirm any: none is kept.
+  const TwoLaps alone = DriveTwoLaps(true, [](ExperienceMapConfig& c) {
+    c.exp_scan_every = 5;
+    c.exp_scan_confirm_ids = 4;
+  });
+  EXPECT_GT(alone.map->scan_registrations(), 10u);
+  EXPECT_TRUE(alone.map->scan_links().empty());
 }
 
 TEST(ScanLinks, AnExperienceKeepsOnlyTheWallsOfTheVisitThatMadeIt) {
