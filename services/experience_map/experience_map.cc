@@ -420,13 +420,10 @@ bool ExperienceMap::ScanLinksAgree(const ScanLink& a, const ScanLink& b) const {
     const Experience& e = experiences_[id];
     return Pose2D{e.x_m, e.y_m, e.th_rad};
   };
-  const auto measured = [](const Link& l) {
-    return Pose2D{l.d_m * std::cos(l.heading_rad), l.d_m * std::sin(l.heading_rad), l.facing_rad};
-  };
   // b's newer end in a's older end's frame: through a's measurement and the map's newer stretch,
   // and through the map's older stretch and b's measurement.
-  const Pose2D via_a = Compose(measured(a.link), Between(pose(a.link.to_id), pose(b.link.to_id)));
-  const Pose2D via_b = Compose(Between(pose(a.link.from_id), pose(b.link.from_id)), measured(b.link));
+  const Pose2D via_a = Compose(a.link.pose(), Between(pose(a.link.to_id), pose(b.link.to_id)));
+  const Pose2D via_b = Compose(Between(pose(a.link.from_id), pose(b.link.from_id)), b.link.pose());
   return std::hypot(via_a.x - via_b.x, via_a.y - via_b.y) <= config_.exp_scan_confirm_m &&
          std::abs(WrapAngle(via_a.theta - via_b.theta)) <= config_.exp_scan_confirm_rad;
 }

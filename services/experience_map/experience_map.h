@@ -68,6 +68,8 @@ struct Link {
   double travel_time_s = 0.0;
   uint32_t traversals = 1;
   bool closes_loop = false;  // made by recognising a known place (kLink), not by a kCreate
+  // `to`'s pose in `from`'s frame, as the link measures it.
+  Pose2D pose() const { return {d_m * std::cos(heading_rad), d_m * std::sin(heading_rad), facing_rad}; }
 };
 
 // exp_scan_links: two stretches of the map whose walls were registered (scan_registration.h);

@@ -16,6 +16,7 @@
 #include <thread>
 #include <utility>
 
+#include "common/node/floor_boundary_check.h"
 #include "common/persistence/state_file.h"
 #include "services/experience_map/experience_map.h"
 #include "services/experience_map/proto/experience_map_node_state.pb.h"
@@ -27,8 +28,6 @@ namespace {
 // State files and user map files are the same format.
 constexpr const char* kStateKind = "rslam.experience_map.NodeState";
 constexpr uint32_t kStateVersion = 1;
-// One floor-boundary point per degree is 360; more than this is not a boundary.
-constexpr size_t kMaxBoundaryPoints = 4096;
 
 using Clock = std::chrono::steady_clock;
 
@@ -107,13 +106,7 @@ class ExperienceMapNode::Mapper {
     if (!std::isfinite(a.relative_angle_rad)) return "relative angle is not finite";
     if (!std::isfinite(a.offset_x_m) || !std::isfinite(a.offset_y_m)) return "view offset is not finite";
     if (a.wall_seen && !std::isfinite(a.wall_direction_rad)) return "wall direction is not finite";
-    if (a.boundary.size() > kMaxBoundaryPoints)
-      return "floor boundary of " + std::to_string(a.boundary.size()) + " points (at most " +
-             std::to_string(kMaxBoundaryPoints) + ")";
-    if (!a.boundary_measured && !a.boundary.empty()) return "floor boundary points but boundary_measured is false";
-    for (const msg::FloorPoint& p : a.boundary)
-      if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m)) return "floor boundary has a non-finite point";
-    return "";
+    return FloorBoundaryProblem(a.boundary_measured, a.boundary);
   }
 
   // Applies the waiting actions that are next in sequence. A gap is given up when it is too old

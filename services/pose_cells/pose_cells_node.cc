@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/node/floor_boundary_check.h"
 #include "common/persistence/state_file.h"
 #include "services/pose_cells/pose_cell_network.h"
 #include "services/pose_cells/proto/pose_cells_node_state.pb.h"
@@ -25,8 +26,6 @@ namespace {
 
 constexpr const char* kStateKind = "rslam.pose_cells.NodeState";
 constexpr uint32_t kStateVersion = 1;
-// One floor-boundary point per degree is 360; more than this is not a boundary.
-constexpr size_t kMaxBoundaryPoints = 4096;
 
 }  // namespace
 
@@ -115,13 +114,7 @@ class PoseCellsNode::Processor {
       return "dt " + std::to_string(v.dt_s) + " s is outside [0, max_dt_s=" + std::to_string(config_.max_dt_s) + "]";
     if (std::abs(v.vtrans_mps) > config_.max_vtrans_mps) return "|vtrans| " + std::to_string(v.vtrans_mps) + " m/s is beyond max_vtrans_mps";
     if (std::abs(v.vrot_radps) > config_.max_vrot_radps) return "|vrot| " + std::to_string(v.vrot_radps) + " rad/s is beyond max_vrot_radps";
-    if (v.boundary.size() > kMaxBoundaryPoints)
-      return "floor boundary of " + std::to_string(v.boundary.size()) + " points (at most " +
-             std::to_string(kMaxBoundaryPoints) + ")";
-    if (!v.boundary_measured && !v.boundary.empty()) return "floor boundary points but boundary_measured is false";
-    for (const msg::FloorPoint& p : v.boundary)
-      if (!std::isfinite(p.x_m) || !std::isfinite(p.y_m)) return "floor boundary has a non-finite point";
-    return "";
+    return FloorBoundaryProblem(v.boundary_measured, v.boundary);
   }
 
   static std::string ViewProblem(const msg::ViewTemplate& v) {

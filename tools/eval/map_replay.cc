@@ -135,8 +135,7 @@ std::vector<ScanLinkError> JudgeScanLinks(std::span<const experience_map::ScanLi
     const auto from = experience_truth.find(s.link.from_id), to = experience_truth.find(s.link.to_id);
     if (from == experience_truth.end() || to == experience_truth.end()) continue;
     const Pose2D truth = Between(from->second, to->second);
-    const Pose2D measured{s.link.d_m * std::cos(s.link.heading_rad), s.link.d_m * std::sin(s.link.heading_rad),
-                          s.link.facing_rad};
+    const Pose2D measured = s.link.pose();
     out.push_back({s.link.from_id, s.link.to_id, std::hypot(measured.x - truth.x, measured.y - truth.y),
                    std::abs(WrapAngle(measured.theta - truth.theta))});
   }
