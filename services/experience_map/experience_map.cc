@@ -185,7 +185,7 @@ bool ExperienceMap::RefusesRecognition(const ExperienceAction& a) const {
       std::abs(WrapAngle(e.th_rad + a.relative_angle_rad - robot.theta)) > config_.exp_recognition_max_turn_rad)
     return true;
   if (config_.exp_recognition_max_jump_m <= 0) return false;
-  const Pose2D placed = Compose({e.x_m, e.y_m, e.th_rad}, {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
+  const Pose2D placed = Compose(e.pose(), {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
   const double jump = std::hypot(placed.x - robot.x, placed.y - robot.y);
   return jump > config_.exp_recognition_max_jump_m + config_.exp_recognition_jump_per_m * driven_since_recognition_m_;
 }
@@ -333,7 +333,7 @@ void ExperienceMap::ObserveBoundary(std::span<const Eigen::Vector2f> points) {
   // the walls of the visit that made it, not those a wrong recognition would put there.
   if (!config_.exp_scan_links || !has_current_ || current_ + 1 != experiences_.size()) return;
   Experience& e = experiences_[current_];
-  const Pose2D robot = Between({e.x_m, e.y_m, e.th_rad}, RobotPose());  // in the experience's frame
+  const Pose2D robot = Between(e.pose(), RobotPose());  // in the experience's frame
   const double c = std::cos(robot.theta), s = std::sin(robot.theta);
   const double range2 = config_.exp_scan_range_m * config_.exp_scan_range_m;
   for (const Eigen::Vector2f& p : points) {
@@ -353,7 +353,7 @@ std::vector<Eigen::Vector2f> ExperienceMap::StretchPoints(uint32_t centre, uint3
   std::unordered_set<int64_t> cells;
   for (uint32_t i = centre > region ? centre - region : 0; i < std::min(end, centre + region + 1); ++i) {
     const Experience& e = experiences_[i];
-    const Pose2D at = Between({c.x_m, c.y_m, c.th_rad}, {e.x_m, e.y_m, e.th_rad});
+    const Pose2D at = Between(c.pose(), e.pose());
     const double cs = std::cos(at.theta), sn = std::sin(at.theta);
     for (const Eigen::Vector2f& p : e.scan) {
       const Eigen::Vector2f q(static_cast<float>(at.x + cs * p.x() - sn * p.y()),
@@ -385,7 +385,7 @@ void ExperienceMap::TryScanLink(uint32_t a) {
   const size_t min_pairs = static_cast<size_t>(config_.exp_scan_min_pairs);
   if (source.size() < min_pairs || target.size() < min_pairs) return;
   const Experience& o = experiences_[*older];
-  const Pose2D guess = Between({o.x_m, o.y_m, o.th_rad}, {newer.x_m, newer.y_m, newer.th_rad});
+  const Pose2D guess = Between(o.pose(), newer.pose());
   ++scan_registrations_;
   const std::optional<ScanRegistration> r = RegisterScans(target, source, guess, kScanRegistration);
   if (!r || r->pairs < config_.exp_scan_min_pairs || r->median_distance_m > config_.exp_scan_max_distance_m ||
@@ -416,10 +416,7 @@ void ExperienceMap::TryScanLink(uint32_t a) {
 }
 
 bool ExperienceMap::ScanLinksAgree(const ScanLink& a, const ScanLink& b) const {
-  const auto pose = [this](uint32_t id) {
-    const Experience& e = experiences_[id];
-    return Pose2D{e.x_m, e.y_m, e.th_rad};
-  };
+  const auto pose = [this](uint32_t id) { return experiences_[id].pose(); };
   // b's newer end in a's older end's frame: through a's measurement and the map's newer stretch,
   // and through the map's older stretch and b's measurement.
   const Pose2D via_a = Compose(a.link.pose(), Between(pose(a.link.to_id), pose(b.link.to_id)));

@@ -58,6 +58,8 @@ struct Experience {
   // exp_scan_links: the floor boundary seen while the robot was at it, in its frame (x forward,
   // y left), at most one point per exp_scan cell (ExperienceMap::ObserveBoundary).
   std::vector<Eigen::Vector2f> scan;
+
+  Pose2D pose() const { return {x_m, y_m, th_rad}; }
 };
 
 struct Link {

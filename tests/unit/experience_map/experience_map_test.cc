@@ -765,16 +765,14 @@ TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
 
   // Experience 0 seen facing as it was made (+x): a half turn from the robot's facing. Refused,
   // the robot's pose unchanged.
-  ExperienceAction half_turn = LinkTo(Kind::kLink, 2, 0);
-  map.Apply(half_turn);
+  map.Apply(LinkTo(Kind::kLink, 2, 0));
   EXPECT_EQ(map.refused_recognitions(), 1u);
   EXPECT_EQ(map.current_id(), 2u);
   EXPECT_EQ(map.pose_cells_current(), std::optional<uint32_t>(0));
   EXPECT_NEAR(map.RobotPose().theta, kPi, 1e-9);
 
   // Seen at a relative angle that puts the robot within 0.5 rad of its facing: taken.
-  ExperienceAction facing = LinkTo(Kind::kLink, 0, 0);
-  facing.experience_id = 1;
+  ExperienceAction facing = LinkTo(Kind::kLink, 0, 1);
   facing.relative_angle_rad = kPi - 0.4;
   map.Apply(facing);
   EXPECT_EQ(map.refused_recognitions(), 1u);
