@@ -164,6 +164,21 @@ void ExplorationPlanner::SetAside(int x, int y, std::string reason, bool blocked
   if (!IsSetAside(x, y)) set_aside_.push_back({x, y, std::move(reason), blocked});
 }
 
+void ExplorationPlanner::FollowGridOrigin(const GridView& occupancy) {
+  const std::pair origin{occupancy.origin_x_m, occupancy.origin_y_m};
+  if (cells_origin_ && *cells_origin_ != origin) {
+    const double cell = occupancy.resolution_m * cell_factor();
+    const int dx = static_cast<int>(std::lround((cells_origin_->first - origin.first) / cell));
+    const int dy = static_cast<int>(std::lround((cells_origin_->second - origin.second) / cell));
+    for (SetAsideGoal& g : set_aside_) g.x += dx, g.y += dy;
+    std::map<std::pair<int, int>, int> blocked;
+    for (const auto& [c, attempts] : blocked_attempts_) blocked[{c.first + dx, c.second + dy}] = attempts;
+    blocked_attempts_ = std::move(blocked);
+    cells_shift_.first += dx, cells_shift_.second += dy;
+  }
+  cells_origin_ = origin;
+}
+
 void ExplorationPlanner::StartFinishing() {
   const int k = FinerPerCoarse();
   std::vector<SetAsideGoal> set_aside;
@@ -353,6 +368,8 @@ bool ExplorationPlanner::AddUncertainFrontierGoals(const CoarseGrid& cs, std::ve
 
 Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
   if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
+  occupancy.Validate();
+  FollowGridOrigin(occupancy);
   ExplorerConfig grid_config = config_;
   grid_config.coarse_cell_factor = cell_factor();
   if (finishing_) grid_config.min_unknown_cells_for_goal = config_.finishing_min_unknown_cells;
@@ -711,19 +728,20 @@ proto::ExplorerState ExplorationPlanner::ToProto() const {
   if (start_) SavePose(*start_, state.mutable_start());
   state.set_returned_to_start(returned_to_start_);
   state.set_return_attempts(return_attempts_);
+  if (cells_origin_) {
+    state.mutable_cells_origin()->set_x(cells_origin_->first);
+    state.mutable_cells_origin()->set_y(cells_origin_->second);
+  }
   return state;
 }
 
 void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
   std::vector<SetAsideGoal> set_aside;
   std::map<std::pair<int, int>, int> blocked;
-  for (const auto& g : state.set_aside()) {
-    if (g.cell().x() < 0 || g.cell().y() < 0) throw std::invalid_argument("explorer state: negative goal cell");
-    set_aside.push_back({g.cell().x(), g.cell().y(), g.reason(), g.blocked()});
-  }
+  // A kept cell may lie off the grid it was last on (a grid that shrank after a correction).
+  for (const auto& g : state.set_aside()) set_aside.push_back({g.cell().x(), g.cell().y(), g.reason(), g.blocked()});
   for (const auto& b : state.blocked()) {
-    if (b.cell().x() < 0 || b.cell().y() < 0 || b.attempts() < 0)
-      throw std::invalid_argument("explorer state: bad blocked-goal entry");
+    if (b.attempts() < 0) throw std::invalid_argument("explorer state: negative refusal count");
     blocked[{b.cell().x(), b.cell().y()}] = b.attempts();
   }
   std::vector<std::pair<double, double>> obstacles;
@@ -751,6 +769,12 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
     start = LoadPose(state.start());
     if (!IsFinite(*start)) throw std::invalid_argument("explorer state: start pose not finite");
   }
+  std::optional<std::pair<double, double>> cells_origin;
+  if (state.has_cells_origin()) {
+    cells_origin.emplace(state.cells_origin().x(), state.cells_origin().y());
+    if (!std::isfinite(cells_origin->first) || !std::isfinite(cells_origin->second))
+      throw std::invalid_argument("explorer state: cells' grid origin not finite");
+  }
   if (trail.size() > static_cast<size_t>(config_.way_back_moves))
     trail.erase(trail.begin(), trail.end() - config_.way_back_moves);
   set_aside_ = std::move(set_aside);
@@ -763,6 +787,7 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
   start_ = start;
   returned_to_start_ = state.returned_to_start();
   return_attempts_ = state.return_attempts();
+  cells_origin_ = cells_origin;
 }
 
 }  // namespace rslam::explorer

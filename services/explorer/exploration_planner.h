@@ -125,6 +125,10 @@ class ExplorationPlanner {
   void ReportBump(const Plan& plan, const Pose2D& at, bool backwards);
 
   const std::vector<SetAsideGoal>& set_aside_goals() const { return set_aside_; }
+  // The cells this planner keeps (goals set aside, refusals counted) are cells of the grid it last
+  // planned on. A grid whose origin has moved (the occupancy service publishes the part of its grid
+  // it has seen, which grows) moves them by whole cells to the same places: the sum of those moves.
+  std::pair<int, int> cells_shift() const { return cells_shift_; }
   // On the finer grid of finishing_cell_factor (goal and set-aside cells are its cells).
   bool finishing() const { return finishing_; }
   // Occupancy cells per exploration cell a side, on the grid in use.
@@ -137,6 +141,8 @@ class ExplorationPlanner {
 
  private:
   void SetAside(int x, int y, std::string reason, bool blocked = false);
+  // Moves the kept cells onto `occupancy`'s cells where its origin differs from the last grid's.
+  void FollowGridOrigin(const GridView& occupancy);
   // Sets aside (as blocked, with the goal's count of refusals) the unknown and uncertain cells of
   // the last grid planned on within set_aside_radius_m of goal cell (gx, gy).
   void SetAsideAround(int gx, int gy);
@@ -183,6 +189,8 @@ class ExplorationPlanner {
   bool returned_to_start_ = false;   // a pirouette within kAtStartM of it (return_to_start)
   int return_attempts_ = 0;          // plans back to it made
   CoarseGrid last_grid_;       // the last PlanFrom's (SetAsideAround)
+  std::optional<std::pair<double, double>> cells_origin_;  // origin of the grid the kept cells are on
+  std::pair<int, int> cells_shift_{0, 0};
 };
 
 }  // namespace rslam::explorer

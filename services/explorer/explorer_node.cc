@@ -329,6 +329,9 @@ class ExplorerNode::Controller {
   // reason on one line), and the goals it tries again.
   void NoteSetAside() {
     const auto& goals = planner_.set_aside_goals();
+    const auto [sx, sy] = planner_.cells_shift();  // the logged goals onto the grid's cells, as the planner's
+    for (SetAsideGoal& g : logged_set_aside_) g.x += sx - logged_shift_.first, g.y += sy - logged_shift_.second;
+    logged_shift_ = {sx, sy};
     const auto listed = [](const std::vector<SetAsideGoal>& list, const SetAsideGoal& g) {
       return std::any_of(list.begin(), list.end(), [&](const SetAsideGoal& o) { return o.x == g.x && o.y == g.y; });
     };
@@ -416,6 +419,7 @@ class ExplorerNode::Controller {
   uint64_t command_seq_ = 0;
   uint32_t commands_sent_ = 0;
   std::vector<SetAsideGoal> logged_set_aside_;
+  std::pair<int, int> logged_shift_{0, 0};  // the planner's cells_shift when they were logged
   msg::ExplorationState state_ = msg::ExplorationState::EXPLORATION_WAITING;
   double goal_x_m_ = 0.0, goal_y_m_ = 0.0;
   std::string reason_ = "waiting for a grid and a pose";

@@ -80,6 +80,22 @@ CellIndex OccupancyGrid::CellOf(double x_m, double y_m) const {
 void OccupancyGrid::Clear() {
   std::fill(values_.begin(), values_.end(), kUnknownValue);
   std::fill(footprint_.begin(), footprint_.end(), 0);
+  seen_x0_ = seen_y0_ = 0;
+  seen_x1_ = seen_y1_ = -1;
+}
+
+void OccupancyGrid::WidenSeen(int x0, int y0, int x1, int y1) {
+  if (seen_x1_ < seen_x0_) {
+    seen_x0_ = x0, seen_y0_ = y0, seen_x1_ = x1, seen_y1_ = y1;
+    return;
+  }
+  seen_x0_ = std::min(seen_x0_, x0), seen_y0_ = std::min(seen_y0_, y0);
+  seen_x1_ = std::max(seen_x1_, x1), seen_y1_ = std::max(seen_y1_, y1);
+}
+
+std::optional<CellWindow> OccupancyGrid::SeenWindow() const {
+  if (seen_x1_ < seen_x0_) return std::nullopt;
+  return CellWindow{seen_x0_, seen_y0_, seen_x1_ - seen_x0_ + 1, seen_y1_ - seen_y0_ + 1};
 }
 
 // Cells whose centre lies within footprint_radius_m of (gx, gy) (grid units).
@@ -89,11 +105,13 @@ void OccupancyGrid::MarkFootprint(double gx, double gy) {
   const int x1 = std::min(grid_.width - 1, static_cast<int>(std::floor(gx + r)));
   const int y0 = std::max(0, static_cast<int>(std::floor(gy - r)));
   const int y1 = std::min(grid_.height - 1, static_cast<int>(std::floor(gy + r)));
+  if (x0 > x1 || y0 > y1) return;
   for (int y = y0; y <= y1; ++y)
     for (int x = x0; x <= x1; ++x) {
       const double ex = x + 0.5 - gx, ey = y + 0.5 - gy;
       if (ex * ex + ey * ey <= r * r) footprint_[static_cast<size_t>(y) * grid_.width + x] = 1;
     }
+  WidenSeen(x0, y0, x1, y1);
 }
 
 inline void OccupancyGrid::ApplyTable(size_t index, const uint16_t* table) {
@@ -135,46 +153,59 @@ int64_t OccupancyGrid::InsertProfile(const RadialObstacleProfile& profile, const
   const double gx = (robot_pose.x - grid_.origin_x_m) * inv_res;
   const double gy = (robot_pose.y - grid_.origin_y_m) * inv_res;
   const double reliable = sensor_.reliable_range_m;
+  double lo_x = gx, lo_y = gy, hi_x = gx, hi_y = gy;  // the rays' bounds (SeenWindow)
   for (size_t i = 0; i < profile.bins.size(); ++i) {
     const RopBin& bin = profile.bins[i];
     if (bin.status == BinStatus::kUnobserved) continue;
     if (!std::isfinite(bin.range_m) || bin.range_m < 0 || !std::isfinite(bin.nearest_visible_m))
       throw std::invalid_argument("profile bin " + std::to_string(i) + " has a bad range");
-    const double angle = robot_pose.theta + profile.BinCentre(i);
-    const double c = std::cos(angle) * inv_res, s = std::sin(angle) * inv_res;
+    double r = 0.0;
+    bool end_is_hit = false;
+    const uint16_t* table = miss_table_.data();
     switch (bin.status) {
       case BinStatus::kObstacle:
         if (bin.range_m <= reliable) {
-          const double r = HitRange(bin.range_m);
-          ApplyRay(gx, gy, gx + c * r, gy + s * r, true, miss_table_.data());
+          r = HitRange(bin.range_m);
+          end_is_hit = true;
           break;
         }
         [[fallthrough]];  // an obstacle beyond the reliable range: free up to that range only
-      case BinStatus::kFree: {
-        const double r = std::min<double>(bin.range_m, reliable);
-        ApplyRay(gx, gy, gx + c * r, gy + s * r, false, miss_table_.data());
+      case BinStatus::kFree: r = std::min<double>(bin.range_m, reliable); break;
+      case BinStatus::kBlind:
+        r = std::min<double>(bin.nearest_visible_m, reliable);
+        table = blind_table_.data();
         break;
-      }
-      case BinStatus::kBlind: {
-        const double r = std::min<double>(bin.nearest_visible_m, reliable);
-        ApplyRay(gx, gy, gx + c * r, gy + s * r, false, blind_table_.data());
-        break;
-      }
-      case BinStatus::kUnobserved: break;
+      case BinStatus::kUnobserved: continue;
     }
+    const double angle = robot_pose.theta + profile.BinCentre(i);
+    const double ex = gx + std::cos(angle) * inv_res * r, ey = gy + std::sin(angle) * inv_res * r;
+    ApplyRay(gx, gy, ex, ey, end_is_hit, table);
+    lo_x = std::min(lo_x, ex), lo_y = std::min(lo_y, ey), hi_x = std::max(hi_x, ex), hi_y = std::max(hi_y, ey);
   }
   for (size_t index : updated_) values_[index] -= kUpdateMarker;
+  if (!updated_.empty()) {  // every ray runs from the robot to its end: their bounds hold the cells updated
+    WidenSeen(std::max(0, static_cast<int>(std::floor(lo_x))), std::max(0, static_cast<int>(std::floor(lo_y))),
+              std::min(grid_.width - 1, static_cast<int>(std::floor(hi_x))),
+              std::min(grid_.height - 1, static_cast<int>(std::floor(hi_y))));
+  }
   if (sensor_.footprint_radius_m > 0) MarkFootprint(gx, gy);
   return static_cast<int64_t>(updated_.size());
 }
 
-std::vector<int8_t> OccupancyGrid::ToRosCells() const {
-  std::vector<int8_t> out(values_.size());
-  std::transform(values_.begin(), values_.end(), out.begin(), [this](uint16_t v) { return percent_table_[v]; });
-  if (!footprint_.empty()) {
-    const auto footprint_percent = static_cast<int8_t>(std::lround(100.0 * sensor_.min_probability));
-    for (size_t i = 0; i < out.size(); ++i)
-      if (footprint_[i]) out[i] = footprint_percent;
+std::vector<int8_t> OccupancyGrid::ToRosCells(const CellWindow& window) const {
+  if (window.width <= 0 || window.height <= 0 || window.x0 < 0 || window.y0 < 0 ||
+      window.x0 + window.width > grid_.width || window.y0 + window.height > grid_.height)
+    throw std::invalid_argument("cell window is empty or not inside the grid");
+  const auto footprint_percent = static_cast<int8_t>(std::lround(100.0 * sensor_.min_probability));
+  std::vector<int8_t> out(static_cast<size_t>(window.width) * window.height);
+  for (int y = 0; y < window.height; ++y) {
+    const size_t from = static_cast<size_t>(window.y0 + y) * grid_.width + window.x0;
+    int8_t* row = out.data() + static_cast<size_t>(y) * window.width;
+    std::transform(values_.begin() + from, values_.begin() + from + window.width, row,
+                   [this](uint16_t v) { return percent_table_[v]; });
+    if (!footprint_.empty())
+      for (int x = 0; x < window.width; ++x)
+        if (footprint_[from + x]) row[x] = footprint_percent;
   }
   return out;
 }

@@ -23,6 +23,7 @@
 // marker makes each profile update a cell at most once even where rays overlap.
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -79,6 +80,15 @@ struct CellIndex {
   bool operator==(const CellIndex&) const = default;
 };
 
+// The cells x0 <= x < x0 + width, y0 <= y < y0 + height.
+struct CellWindow {
+  int x0 = 0;
+  int y0 = 0;
+  int width = 0;
+  int height = 0;
+  bool operator==(const CellWindow&) const = default;
+};
+
 class OccupancyGrid {
  public:
   static constexpr uint16_t kUnknownValue = 0;
@@ -119,8 +129,15 @@ class OccupancyGrid {
   double ValueToLogOdds(uint16_t value) const;
   uint16_t LogOddsToValue(double log_odds) const;
 
-  // ROS nav_msgs/OccupancyGrid convention: -1 unknown, else round(100 * p); row-major from (0,0).
-  std::vector<int8_t> ToRosCells() const;
+  // The smallest window holding every cell a profile updated (or a footprint marked) since the
+  // grid was made or cleared; none before the first.
+  std::optional<CellWindow> SeenWindow() const;
+
+  // ROS nav_msgs/OccupancyGrid convention: -1 unknown, else round(100 * p); row-major from the
+  // window's lower-left cell (the whole grid's without one). Throws std::invalid_argument for a
+  // window that is empty or not inside the grid.
+  std::vector<int8_t> ToRosCells(const CellWindow& window) const;
+  std::vector<int8_t> ToRosCells() const { return ToRosCells({0, 0, grid_.width, grid_.height}); }
   std::span<const uint16_t> values() const { return values_; }
 
  private:
@@ -136,6 +153,8 @@ class OccupancyGrid {
   std::vector<uint16_t> values_;
   std::vector<uint8_t> footprint_;  // 1: a cell within footprint_radius_m of a profile's pose (empty when off)
   std::vector<size_t> updated_;  // cells carrying the update marker during one insertion
+  void WidenSeen(int x0, int y0, int x1, int y1);
+  int seen_x0_ = 0, seen_y0_ = 0, seen_x1_ = -1, seen_y1_ = -1;  // SeenWindow, inclusive; x1 < x0: none
   int64_t updates_in_profile_ = 0;
 };
 

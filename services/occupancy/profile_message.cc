@@ -1,5 +1,6 @@
 #include "services/occupancy/profile_message.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -66,14 +67,27 @@ RadialObstacleProfile ProfileFromMessage(const msg::ObstacleProfile& message) {
   return rop;
 }
 
+CellWindow GridMessageWindow(const OccupancyGrid& grid) {
+  const std::optional<CellWindow> seen = grid.SeenWindow();
+  if (!seen) return {0, 0, grid.width(), grid.height()};
+  const int margin = static_cast<int>(std::ceil(kGridMessageMarginM / grid.grid_config().resolution_m));
+  const int b = kGridMessageBlockCells;
+  const int x0 = std::max(0, seen->x0 - margin) / b * b, y0 = std::max(0, seen->y0 - margin) / b * b;
+  const int x1 = std::min(grid.width(), (seen->x0 + seen->width + margin + b - 1) / b * b);
+  const int y1 = std::min(grid.height(), (seen->y0 + seen->height + margin + b - 1) / b * b);
+  return {x0, y0, x1 - x0, y1 - y0};
+}
+
 msg::OccupancyGrid GridToMessage(const OccupancyGrid& grid) {
+  const CellWindow window = GridMessageWindow(grid);
+  const GridConfig& config = grid.grid_config();
   msg::OccupancyGrid out{};
-  out.width = static_cast<uint32_t>(grid.width());
-  out.height = static_cast<uint32_t>(grid.height());
-  out.resolution_m = static_cast<float>(grid.grid_config().resolution_m);
-  out.origin_x_m = grid.grid_config().origin_x_m;
-  out.origin_y_m = grid.grid_config().origin_y_m;
-  out.cells = grid.ToRosCells();
+  out.width = static_cast<uint32_t>(window.width);
+  out.height = static_cast<uint32_t>(window.height);
+  out.resolution_m = static_cast<float>(config.resolution_m);
+  out.origin_x_m = config.origin_x_m + window.x0 * config.resolution_m;
+  out.origin_y_m = config.origin_y_m + window.y0 * config.resolution_m;
+  out.cells = grid.ToRosCells(window);
   return out;
 }
 

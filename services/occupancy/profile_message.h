@@ -19,8 +19,19 @@ msg::ObstacleProfile ProfileToMessage(const msg::Header& header, const AnchoredP
 // the bus's decoder already refuses one on the wire, a message built in process may hold one).
 RadialObstacleProfile ProfileFromMessage(const msg::ObstacleProfile& message);
 
-// The grid's geometry and ROS cells (OccupancyGrid::ToRosCells); header and map_version are the
-// caller's.
+// The part of a grid a message carries: the seen window (OccupancyGrid::SeenWindow) widened by
+// kGridMessageMarginM of unknown cells, its edges rounded out to multiples of
+// kGridMessageBlockCells from the grid's corner, clipped to the grid; the whole grid before
+// anything was seen. A demo run's 40 m x 40 m grid (1,600 x 1,600 cells, 2.6 MB) is published ten
+// times a simulated second to three readers; the room it maps is about a quarter of that. As the
+// seen area grows, the window's origin moves by whole blocks, so a reader's cells (the explorer's
+// 8-cell exploration cells) keep lining up with the grid's.
+inline constexpr double kGridMessageMarginM = 1.0;
+inline constexpr int kGridMessageBlockCells = 64;
+CellWindow GridMessageWindow(const OccupancyGrid& grid);
+
+// The occupancy/grid message: geometry and ROS cells (OccupancyGrid::ToRosCells) of
+// GridMessageWindow; header and map_version are the caller's.
 msg::OccupancyGrid GridToMessage(const OccupancyGrid& grid);
 
 }  // namespace rslam::occupancy

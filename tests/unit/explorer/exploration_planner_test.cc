@@ -546,6 +546,37 @@ TEST(ExplorationPlannerTest, SavedStateKeepsSetAsideGoalsAcrossARestart) {
   EXPECT_EQ(restarted.set_aside_goals().size(), 1u);  // nothing half-loaded
 }
 
+// The occupancy service publishes the part of its grid it has seen: as that grows, the grid's
+// origin moves, and a goal set aside must stay on its place, across a restart too.
+TEST(ExplorationPlannerTest, ASetAsideGoalStaysOnItsPlaceWhenTheGridsOriginMoves) {
+  TestGrid grid(20, 20, 0);
+  grid.Set(10, 10, -1);
+  ExplorationPlanner planner(Config());
+  Plan plan = planner.PlanFrom(grid.View(), {0.25, 0.25, 0.0});
+  planner.RecordPirouette(plan.target);
+  ASSERT_TRUE(planner.PlanFrom(grid.View(), plan.target).complete);
+  ASSERT_EQ(planner.set_aside_goals().size(), 1u);
+  const proto::ExplorerState saved = planner.ToProto();
+
+  // The same room in a grid reaching 1 m farther left and down (20 cells, 10 exploration cells).
+  std::vector<int8_t> larger(40 * 40, -1);
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 20; ++x) larger[(y + 20) * 40 + x + 20] = grid.cells[y * 20 + x];
+  const GridView moved{40, 40, 0.05, -1.0, -1.0, larger};
+  EXPECT_TRUE(planner.PlanFrom(moved, plan.target).complete);
+  ASSERT_EQ(planner.set_aside_goals().size(), 1u) << "the same cell, not a second one";
+  EXPECT_EQ(planner.set_aside_goals()[0].x, 15);
+  EXPECT_EQ(planner.set_aside_goals()[0].y, 15);
+  EXPECT_EQ(planner.cells_shift(), std::pair(10, 10));
+
+  ExplorationPlanner restarted(Config());
+  restarted.LoadProto(saved);  // saved on the first grid
+  EXPECT_TRUE(restarted.PlanFrom(moved, plan.target).complete);
+  ASSERT_EQ(restarted.set_aside_goals().size(), 1u);
+  EXPECT_EQ(restarted.set_aside_goals()[0].x, 15);
+  EXPECT_EQ(restarted.set_aside_goals()[0].y, 15);
+}
+
 TEST(ExplorationPlannerTest, ReturnsOnceToWhereExplorationBeganBeforeCallingItComplete) {
   ExplorerConfig config = Config();
   config.pirouette_at_goal = false;

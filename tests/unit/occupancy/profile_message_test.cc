@@ -63,6 +63,52 @@ TEST(ProfileMessageTest, EveryBinComesBackAsTheServiceInsertedIt) {
   EXPECT_EQ(from_message.ToRosCells(), from_profile.ToRosCells());
 }
 
+TEST(ProfileMessageTest, TheGridMessageCarriesTheSeenPartOfTheGridInWholeBlocks) {
+  SensorModelConfig model;
+  model.reliable_range_m = 1.5;
+  const GridConfig config{0.025, 1600, 1600, -20.0, -20.0};
+  OccupancyGrid grid(config, model);
+  msg::OccupancyGrid m = GridToMessage(grid);  // nothing seen: the whole grid
+  EXPECT_EQ(m.width, 1600u);
+  EXPECT_EQ(m.height, 1600u);
+  EXPECT_DOUBLE_EQ(m.origin_x_m, -20.0);
+
+  grid.InsertProfile(Profile().profile, {0.3, -0.2, 0.7});
+  grid.InsertProfile(Profile().profile, {-2.9, 1.4, 2.5});
+  m = GridToMessage(grid);
+  const CellWindow w = GridMessageWindow(grid);
+  EXPECT_EQ(w.x0 % kGridMessageBlockCells, 0);
+  EXPECT_EQ(w.y0 % kGridMessageBlockCells, 0);
+  EXPECT_EQ(w.width % kGridMessageBlockCells, 0);
+  EXPECT_LT(m.width * m.height, 1600u * 1600u / 10) << "a small part of the grid";
+  ASSERT_EQ(m.cells.size(), size_t{m.width} * m.height);
+  EXPECT_DOUBLE_EQ(m.origin_x_m, -20.0 + w.x0 * 0.025);
+  EXPECT_DOUBLE_EQ(m.origin_y_m, -20.0 + w.y0 * 0.025);
+  // Every cell of the grid is in the message as the whole grid has it, or unknown and at least the
+  // margin away from every seen cell.
+  const std::vector<int8_t> all = grid.ToRosCells();
+  const int margin = static_cast<int>(kGridMessageMarginM / 0.025);
+  int seen = 0;
+  for (int y = 0; y < 1600; ++y)
+    for (int x = 0; x < 1600; ++x) {
+      const int8_t v = all[static_cast<size_t>(y) * 1600 + x];
+      const bool inside = x >= w.x0 && y >= w.y0 && x < w.x0 + w.width && y < w.y0 + w.height;
+      if (inside) {
+        ASSERT_EQ(m.cells[static_cast<size_t>(y - w.y0) * m.width + (x - w.x0)], v) << x << "," << y;
+      } else {
+        ASSERT_EQ(v, -1) << x << "," << y;
+      }
+      if (v < 0) continue;
+      ++seen;
+      EXPECT_TRUE(x - margin >= w.x0 && y - margin >= w.y0 && x + margin < w.x0 + w.width &&
+                  y + margin < w.y0 + w.height) << x << "," << y;
+    }
+  EXPECT_GT(seen, 100);
+
+  grid.Clear();
+  EXPECT_EQ(GridToMessage(grid).width, 1600u);
+}
+
 TEST(ProfileMessageTest, MalformedMessagesAreRefusedNamingTheBin) {
   const msg::ObstacleProfile good = ProfileToMessage(Header(), Profile(), 1.5f);
   auto refused = [](msg::ObstacleProfile m) -> std::string {
