@@ -524,13 +524,21 @@ TEST(ExplorationPlannerTest, GoalsStillUnknownAfterALookAreNotTriedAgain) {
   EXPECT_TRUE(planner.PlanFrom(grid.View(), {0.25, 0.25, 0.0}).complete);  // from elsewhere too
 }
 
+// A known room with one unknown cell nothing resolves (cell (10, 10), exploration cell (5, 5)), and
+// the planner having gone there, looked all round and set it aside: where the robot stands.
+Pose2D GoAndSetAsideTheUnknownCell(ExplorationPlanner& planner, const TestGrid& grid) {
+  const Plan plan = planner.PlanFrom(grid.View(), {0.25, 0.25, 0.0});
+  planner.RecordPirouette(plan.target);
+  EXPECT_TRUE(planner.PlanFrom(grid.View(), plan.target).complete);
+  EXPECT_EQ(planner.set_aside_goals().size(), 1u);
+  return plan.target;
+}
+
 TEST(ExplorationPlannerTest, SavedStateKeepsSetAsideGoalsAcrossARestart) {
   TestGrid grid(20, 20, 0);
   grid.Set(10, 10, -1);
   ExplorationPlanner planner(Config());
-  Plan plan = planner.PlanFrom(grid.View(), {0.25, 0.25, 0.0});
-  planner.RecordPirouette(plan.target);
-  ASSERT_TRUE(planner.PlanFrom(grid.View(), plan.target).complete);
+  GoAndSetAsideTheUnknownCell(planner, grid);
   proto::ExplorerState saved;
   ASSERT_TRUE(saved.ParseFromString(planner.ToProto().SerializeAsString()));
 
@@ -552,10 +560,7 @@ TEST(ExplorationPlannerTest, ASetAsideGoalStaysOnItsPlaceWhenTheGridsOriginMoves
   TestGrid grid(20, 20, 0);
   grid.Set(10, 10, -1);
   ExplorationPlanner planner(Config());
-  Plan plan = planner.PlanFrom(grid.View(), {0.25, 0.25, 0.0});
-  planner.RecordPirouette(plan.target);
-  ASSERT_TRUE(planner.PlanFrom(grid.View(), plan.target).complete);
-  ASSERT_EQ(planner.set_aside_goals().size(), 1u);
+  const Pose2D robot = GoAndSetAsideTheUnknownCell(planner, grid);
   const proto::ExplorerState saved = planner.ToProto();
 
   // The same room in a grid reaching 1 m farther left and down (20 cells, 10 exploration cells).
@@ -563,7 +568,7 @@ TEST(ExplorationPlannerTest, ASetAsideGoalStaysOnItsPlaceWhenTheGridsOriginMoves
   for (int y = 0; y < 20; ++y)
     for (int x = 0; x < 20; ++x) larger[(y + 20) * 40 + x + 20] = grid.cells[y * 20 + x];
   const GridView moved{40, 40, 0.05, -1.0, -1.0, larger};
-  EXPECT_TRUE(planner.PlanFrom(moved, plan.target).complete);
+  EXPECT_TRUE(planner.PlanFrom(moved, robot).complete);
   ASSERT_EQ(planner.set_aside_goals().size(), 1u) << "the same cell, not a second one";
   EXPECT_EQ(planner.set_aside_goals()[0].x, 15);
   EXPECT_EQ(planner.set_aside_goals()[0].y, 15);
@@ -571,7 +576,7 @@ TEST(ExplorationPlannerTest, ASetAsideGoalStaysOnItsPlaceWhenTheGridsOriginMoves
 
   ExplorationPlanner restarted(Config());
   restarted.LoadProto(saved);  // saved on the first grid
-  EXPECT_TRUE(restarted.PlanFrom(moved, plan.target).complete);
+  EXPECT_TRUE(restarted.PlanFrom(moved, robot).complete);
   ASSERT_EQ(restarted.set_aside_goals().size(), 1u);
   EXPECT_EQ(restarted.set_aside_goals()[0].x, 15);
   EXPECT_EQ(restarted.set_aside_goals()[0].y, 15);
