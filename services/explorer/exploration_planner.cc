@@ -164,12 +164,11 @@ void ExplorationPlanner::SetAside(int x, int y, std::string reason, bool blocked
   if (!IsSetAside(x, y)) set_aside_.push_back({x, y, std::move(reason), blocked});
 }
 
-void ExplorationPlanner::FollowGridOrigin(const GridView& occupancy) {
-  const std::pair origin{occupancy.origin_x_m, occupancy.origin_y_m};
+void ExplorationPlanner::FollowGridOrigin(const CoarseGrid& cs) {
+  const std::pair origin{cs.origin_x_m, cs.origin_y_m};
   if (cells_origin_ && *cells_origin_ != origin) {
-    const double cell = occupancy.resolution_m * cell_factor();
-    const int dx = static_cast<int>(std::lround((cells_origin_->first - origin.first) / cell));
-    const int dy = static_cast<int>(std::lround((cells_origin_->second - origin.second) / cell));
+    const int dx = static_cast<int>(std::lround((cells_origin_->first - origin.first) / cs.cell_size_m));
+    const int dy = static_cast<int>(std::lround((cells_origin_->second - origin.second) / cs.cell_size_m));
     for (SetAsideGoal& g : set_aside_) g.x += dx, g.y += dy;
     std::map<std::pair<int, int>, int> blocked;
     for (const auto& [c, attempts] : blocked_attempts_) blocked[{c.first + dx, c.second + dy}] = attempts;
@@ -368,12 +367,11 @@ bool ExplorationPlanner::AddUncertainFrontierGoals(const CoarseGrid& cs, std::ve
 
 Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
   if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
-  occupancy.Validate();
-  FollowGridOrigin(occupancy);
   ExplorerConfig grid_config = config_;
   grid_config.coarse_cell_factor = cell_factor();
   if (finishing_) grid_config.min_unknown_cells_for_goal = config_.finishing_min_unknown_cells;
   const CoarseGrid cs = BuildConfigurationSpace(occupancy, grid_config);
+  FollowGridOrigin(cs);
   last_grid_ = cs;
   const int rx = cs.CellX(robot.x), ry = cs.CellY(robot.y);
   if (!cs.Contains(rx, ry)) throw std::invalid_argument("robot is outside the map");

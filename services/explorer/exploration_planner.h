@@ -141,8 +141,8 @@ class ExplorationPlanner {
 
  private:
   void SetAside(int x, int y, std::string reason, bool blocked = false);
-  // Moves the kept cells onto `occupancy`'s cells where its origin differs from the last grid's.
-  void FollowGridOrigin(const GridView& occupancy);
+  // Moves the kept cells onto the cells of `cs` where its origin differs from the last grid's.
+  void FollowGridOrigin(const CoarseGrid& cs);
   // Sets aside (as blocked, with the goal's count of refusals) the unknown and uncertain cells of
   // the last grid planned on within set_aside_radius_m of goal cell (gx, gy).
   void SetAsideAround(int gx, int gy);

@@ -90,7 +90,7 @@ MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config)
     if (map.has_current()) {
       const experience_map::Experience& e = map.experiences()[map.current_id()];
       current = e.id;
-      experience = {e.x_m, e.y_m, e.th_rad};
+      experience = e.pose();
     }
     seen.experience_first_frame.emplace(current, frame.frame_seq);
 
