@@ -53,6 +53,10 @@ void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s)
   accum_x_ += dist * std::cos(accum_facing_);
   accum_y_ += dist * std::sin(accum_facing_);
   accum_time_ += dt_s;
+  const double bridge_facing = accum_facing_ + bridge_turn_ - bridge_from_th_;  // in bridge_from_'s frame
+  bridge_x_ += dist * std::cos(bridge_facing);
+  bridge_y_ += dist * std::sin(bridge_facing);
+  bridge_time_ += dt_s;
 }
 
 void ExperienceMap::HoldHeading(double wall_direction_rad) {
@@ -166,6 +170,17 @@ void ExperienceMap::AverageInto(Link& link, const Observation& obs, bool reverse
   link.traversals += 1;
 }
 
+void ExperienceMap::StartBridge() {
+  bridge_from_ = current_;
+  bridge_from_th_ = has_current_ ? experiences_[current_].th_rad : 0.0;
+  const double c = std::cos(bridge_from_th_), s = std::sin(bridge_from_th_);
+  bridge_x_ = c * accum_x_ + s * accum_y_;
+  bridge_y_ = -s * accum_x_ + c * accum_y_;
+  bridge_turn_ = 0.0;
+  bridge_time_ = accum_time_;
+  bridge_pending_ = false;
+}
+
 void ExperienceMap::SetCurrent(uint32_t id, const ExperienceAction& a) {
   if (has_current_ && id == current_) return;  // OpenRatSLAM keeps accumulating then
   current_ = id;
@@ -250,8 +265,16 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       experiences_.push_back(e);
       links_from_.emplace_back();
       links_to_.emplace_back();
-      if (has_current_) AddLink(current_, e.id, ObservedFromCurrent({}));
+      if (has_current_) {
+        if (config_.exp_bridge_recognitions && bridge_pending_) {
+          const double facing = WrapAngle(accum_facing_ + bridge_turn_ - bridge_from_th_);
+          AddLink(bridge_from_, e.id, {std::hypot(bridge_x_, bridge_y_), std::atan2(bridge_y_, bridge_x_), facing, bridge_time_});
+        } else {
+          AddLink(current_, e.id, ObservedFromCurrent({}));
+        }
+      }
       SetCurrent(e.id, {});
+      StartBridge();
       pose_cells_current_.reset();
       // The robot has left the experiences before e, so the stretch centred exp_scan_region
       // before it is complete.
@@ -300,6 +323,7 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         if (!config_.exp_graph_optimisation) SeedLocalRegion(current_, to);
       }
       const Pose2D dead_reckoned = RobotPose();
+      const double bridge_facing = accum_facing_ + bridge_turn_;
       SetCurrent(to, recognised);
       if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
         accum_facing_ = WrapAngle(dead_reckoned.theta +
@@ -310,6 +334,8 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         accum_x_ = keep * (dead_reckoned.x - experiences_[to].x_m) + config_.exp_position_correction * accum_x_;
         accum_y_ = keep * (dead_reckoned.y - experiences_[to].y_m) + config_.exp_position_correction * accum_y_;
       }
+      bridge_turn_ = bridge_facing - accum_facing_;
+      bridge_pending_ = true;
       break;
     }
   }
@@ -813,6 +839,7 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   turned_since_hold_rad_ = std::numeric_limits<double>::max();  // the gate wide open
   pose_cells_current_ = m.has_pose_cells_current() ? std::optional(m.pose_cells_current_id()) : std::nullopt;
   driven_since_recognition_m_ = m.driven_since_recognition_m();
+  StartBridge();
 }
 
 }  // namespace rslam::experience_map

@@ -199,6 +199,8 @@ class ExperienceMap {
   int FindLink(uint32_t from, uint32_t to) const;
   // Makes `id` current, the robot at the action's offset from it facing its relative angle.
   void SetCurrent(uint32_t id, const ExperienceAction& a);
+  // exp_bridge_recognitions: the odometry from here on bridges from the current experience.
+  void StartBridge();
   // Relaxes link links_[index] (000 eq. 3); returns the largest change it made.
   double RelaxLink(uint32_t index);
   void SeedLocalRegion(uint32_t a, uint32_t b);
@@ -267,6 +269,14 @@ class ExperienceMap {
   // whether it is kept. Not saved: a loaded map waits for two again.
   std::optional<ScanLink> last_scan_;
   bool last_scan_kept_ = false;
+  // exp_bridge_recognitions: the experience made last (bridge_from_), the robot's odometry since
+  // it in its frame as it was made (x, y), the robot's facing there minus accum_facing_ (which
+  // only a recognition changes), and whether a recognition was taken since. Not saved: a loaded
+  // map starts a bridge at its current experience.
+  uint32_t bridge_from_ = 0;
+  double bridge_from_th_ = 0.0;
+  double bridge_x_ = 0.0, bridge_y_ = 0.0, bridge_turn_ = 0.0, bridge_time_ = 0.0;
+  bool bridge_pending_ = false;
   bool graph_pending_ = false;    // links changed since the last least-squares correction
   int frames_since_graph_ = 0;
 };

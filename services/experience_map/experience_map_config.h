@@ -44,6 +44,13 @@ struct ExperienceMapConfig {
   // match radius, to the map). The link's correction of the map is unchanged; below about 0.2
   // the map no longer holds together (a dead-reckoned robot keeps pulling it apart).
   double exp_position_correction = 1.0;
+  // After a recognition, the next experience is linked from the last one made before it by the
+  // odometry alone (its turns held by the walls as every link's are), not from the recognised
+  // experience with the robot placed on it. The recognition's own link then carries where the
+  // recognition put the robot, at a recognition's uncertainty; linked from the recognised
+  // experience, its placement also went into the new experience's link, which is held as firmly
+  // as odometry.
+  bool exp_bridge_recognitions = false;
   // Least-squares correction (pose_graph.h) instead of the relaxation: when a link was closed or
   // re-traversed, at most every exp_graph_period_frames frames, exp_graph_iterations Gauss-Newton
   // steps over the whole map. Off = OpenRatSLAM's relaxation (the exp_loops, exp_correction and
@@ -204,6 +211,8 @@ struct ExperienceMapConfig {
       "... walls facing enough ways to fix the pose along them (0: one straight wall, 0.5: every way)");
     v("exp_scan_max_correction_m", exp_scan_max_correction_m, "... and a move of the map's guess within this (m)");
     v("exp_scan_max_correction_rad", exp_scan_max_correction_rad, "... and a turn within this (rad)");
+    v("exp_bridge_recognitions", exp_bridge_recognitions,
+      "after a recognition, link the next experience from the last one made, by odometry alone");
     v("exp_scan_confirm_ids", exp_scan_confirm_ids,
       "> 0: a registration is kept once another around an experience at most this many ids later agrees with it");
     v("exp_scan_confirm_m", exp_scan_confirm_m, "... closing the loop of the two and the map within this (m)");

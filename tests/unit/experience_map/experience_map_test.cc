@@ -433,6 +433,70 @@ proto::ExperienceMap SquareWithAnOffClosure(double closure_error) {
   return m;
 }
 
+// exp_bridge_recognitions. Experiences 0, 1, 2 a metre apart along +x; from 2 the robot drives on
+// 0.5 m and sees experience 0 again (a lookalike: it truly stands 2.5 m from 0), which puts it on 0
+// and turns its facing by 0.2 rad; then it turns 0.3 rad, drives 0.5 m and makes experience 3.
+// Returns the map after the least-squares correction.
+std::unique_ptr<ExperienceMap> RecogniseALookalikeThenCreate(bool bridge) {
+  ExperienceMapConfig config = LeastSquares(1);
+  config.exp_bridge_recognitions = bridge;
+  auto map = std::make_unique<ExperienceMap>(config);
+  map->Apply(Create(0, kNoExperience));
+  map->Integrate(0.0, -kPi / 2, 1.0);  // exp 0 faces +y: turn to +x
+  map->Integrate(1.0, 0.0, 1.0);
+  map->Apply(Create(1, 0));
+  map->Integrate(1.0, 0.0, 1.0);
+  map->Apply(Create(2, 1));
+  map->Integrate(0.5, 0.0, 1.0);
+  ExperienceAction lookalike = LinkTo(Kind::kLink, 2, 0);
+  lookalike.relative_angle_rad = -kPi / 2 + 0.2;
+  map->Apply(lookalike);
+  map->Integrate(0.0, 0.3, 1.0);
+  map->Integrate(0.5, 0.0, 1.0);
+  map->Apply(Create(3, 0));
+  map->OptimiseGraph(10);
+  return map;
+}
+
+// The experience made after a recognition is linked by the odometry from the one made before it,
+// so a recognition's placement is held as loosely as a recognition, not as firmly as odometry.
+TEST(ExperienceMap, AfterARecognitionTheNextExperienceIsBridgedByOdometryFromTheLastOneMade) {
+  const auto bridged = RecogniseALookalikeThenCreate(true);
+  ASSERT_EQ(bridged->experiences().size(), 4u);
+  const Link& bridge = bridged->links().back();
+  EXPECT_EQ(bridge.from_id, 2u);
+  EXPECT_EQ(bridge.to_id, 3u);
+  EXPECT_FALSE(bridge.closes_loop);
+  // Odometry alone: 0.5 m ahead, then 0.5 m at 0.3 rad; the recognition's 0.2 rad is not in it.
+  EXPECT_NEAR(bridge.pose().x, 0.5 + 0.5 * std::cos(0.3), 1e-9);
+  EXPECT_NEAR(bridge.pose().y, 0.5 * std::sin(0.3), 1e-9);
+  EXPECT_NEAR(bridge.pose().theta, 0.3, 1e-9);
+  EXPECT_EQ(bridged->PathToGoal(3, 0).size(), 3u);  // 3 -> 2 -> 0 (the recognition's link)
+  // After the correction 3 is where the odometry from 2 puts it.
+  const auto& e = bridged->experiences();
+  const Pose2D three = Between(e[2].pose(), e[3].pose());
+  EXPECT_NEAR(three.x, bridge.pose().x, 0.01);
+  EXPECT_NEAR(three.y, bridge.pose().y, 0.01);
+
+  // Without it the new experience hangs off the recognised one, the recognition's placement in a
+  // link as firm as odometry: 3 ends beside 0, well over a metre from where the robot drove it.
+  const auto hung = RecogniseALookalikeThenCreate(false);
+  EXPECT_EQ(hung->links().back().from_id, 0u);
+  const auto& h = hung->experiences();
+  const Pose2D hung_three = Between(h[2].pose(), h[3].pose());
+  EXPECT_GT(std::hypot(hung_three.x - bridge.pose().x, hung_three.y - bridge.pose().y), 1.0);
+
+  // Without a recognition in between, links are the same either way.
+  ExperienceMapConfig config = LeastSquares(1);
+  config.exp_bridge_recognitions = true;
+  ExperienceMap plain(config);
+  plain.Apply(Create(0, kNoExperience));
+  plain.Integrate(0.7, 0.1, 1.0);
+  plain.Apply(Create(1, 0));
+  EXPECT_EQ(plain.links().back().from_id, 0u);
+  EXPECT_NEAR(plain.links().back().d_m, 0.7, 1e-9);
+}
+
 TEST(ExperienceMap, LeastSquaresPutsTheErrorOnTheLeastSureLinks) {
   for (const double closure_sigma : {0.2, 0.02}) {  // recognition less sure than odometry, as sure
     ExperienceMapConfig cfg = LeastSquares(1);
