@@ -161,6 +161,8 @@ struct ExperienceMapConfig {
       "a transition along an existing link (set) takes the view's offset angle (false: the map's facing)");
     v("exp_position_correction", exp_position_correction,
       "on recognition, the share of the way from the dead-reckoned position to the experience's (1 = OpenRatSLAM)");
+    v("exp_bridge_recognitions", exp_bridge_recognitions,
+      "after a recognition, link the next experience from the last one made, by odometry alone");
     v("exp_graph_optimisation", exp_graph_optimisation, "least-squares correction of the whole map after loop closures");
     v("exp_graph_period_frames", exp_graph_period_frames, "fewest frames between two least-squares corrections");
     v("exp_graph_iterations", exp_graph_iterations, "Gauss-Newton steps per least-squares correction");
@@ -211,8 +213,6 @@ struct ExperienceMapConfig {
       "... walls facing enough ways to fix the pose along them (0: one straight wall, 0.5: every way)");
     v("exp_scan_max_correction_m", exp_scan_max_correction_m, "... and a move of the map's guess within this (m)");
     v("exp_scan_max_correction_rad", exp_scan_max_correction_rad, "... and a turn within this (rad)");
-    v("exp_bridge_recognitions", exp_bridge_recognitions,
-      "after a recognition, link the next experience from the last one made, by odometry alone");
     v("exp_scan_confirm_ids", exp_scan_confirm_ids,
       "> 0: a registration is kept once another around an experience at most this many ids later agrees with it");
     v("exp_scan_confirm_m", exp_scan_confirm_m, "... closing the loop of the two and the map within this (m)");
