@@ -53,10 +53,12 @@ void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s)
   accum_x_ += dist * std::cos(accum_facing_);
   accum_y_ += dist * std::sin(accum_facing_);
   accum_time_ += dt_s;
-  const double bridge_facing = accum_facing_ + bridge_turn_ - bridge_from_th_;  // in bridge_from_'s frame
-  bridge_x_ += dist * std::cos(bridge_facing);
-  bridge_y_ += dist * std::sin(bridge_facing);
-  bridge_time_ += dt_s;
+  if (config_.exp_bridge_recognitions) {
+    const double bridge_facing = accum_facing_ + bridge_facing_offset_;  // in bridge_from_'s frame
+    bridge_x_ += dist * std::cos(bridge_facing);
+    bridge_y_ += dist * std::sin(bridge_facing);
+    bridge_time_ += dt_s;
+  }
 }
 
 void ExperienceMap::HoldHeading(double wall_direction_rad) {
@@ -172,13 +174,18 @@ void ExperienceMap::AverageInto(Link& link, const Observation& obs, bool reverse
 
 void ExperienceMap::StartBridge() {
   bridge_from_ = current_;
-  bridge_from_th_ = has_current_ ? experiences_[current_].th_rad : 0.0;
-  const double c = std::cos(bridge_from_th_), s = std::sin(bridge_from_th_);
+  const double th = has_current_ ? experiences_[current_].th_rad : 0.0;
+  const double c = std::cos(th), s = std::sin(th);
   bridge_x_ = c * accum_x_ + s * accum_y_;
   bridge_y_ = -s * accum_x_ + c * accum_y_;
-  bridge_turn_ = 0.0;
+  bridge_facing_offset_ = -th;
   bridge_time_ = accum_time_;
   bridge_pending_ = false;
+}
+
+ExperienceMap::Observation ExperienceMap::ObservedFromBridge() const {
+  return {std::hypot(bridge_x_, bridge_y_), std::atan2(bridge_y_, bridge_x_),
+          WrapAngle(accum_facing_ + bridge_facing_offset_), bridge_time_};
 }
 
 void ExperienceMap::SetCurrent(uint32_t id, const ExperienceAction& a) {
@@ -267,8 +274,7 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       links_to_.emplace_back();
       if (has_current_) {
         if (config_.exp_bridge_recognitions && bridge_pending_) {
-          const double facing = WrapAngle(accum_facing_ + bridge_turn_ - bridge_from_th_);
-          AddLink(bridge_from_, e.id, {std::hypot(bridge_x_, bridge_y_), std::atan2(bridge_y_, bridge_x_), facing, bridge_time_});
+          AddLink(bridge_from_, e.id, ObservedFromBridge());
         } else {
           AddLink(current_, e.id, ObservedFromCurrent({}));
         }
@@ -323,7 +329,6 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         if (!config_.exp_graph_optimisation) SeedLocalRegion(current_, to);
       }
       const Pose2D dead_reckoned = RobotPose();
-      const double bridge_facing = accum_facing_ + bridge_turn_;
       SetCurrent(to, recognised);
       if (config_.exp_heading_correction < 1.0) {  // at 1 the recognised heading stands, bit for bit
         accum_facing_ = WrapAngle(dead_reckoned.theta +
@@ -334,7 +339,7 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         accum_x_ = keep * (dead_reckoned.x - experiences_[to].x_m) + config_.exp_position_correction * accum_x_;
         accum_y_ = keep * (dead_reckoned.y - experiences_[to].y_m) + config_.exp_position_correction * accum_y_;
       }
-      bridge_turn_ = bridge_facing - accum_facing_;
+      bridge_facing_offset_ += dead_reckoned.theta - accum_facing_;  // the bridge does not turn with it
       bridge_pending_ = true;
       break;
     }

@@ -194,6 +194,8 @@ class ExperienceMap {
     double d, heading, facing, time;
   };
   Observation ObservedFromCurrent(const ExperienceAction& a) const;
+  // exp_bridge_recognitions: the robot in bridge_from_'s frame, by the odometry since it.
+  Observation ObservedFromBridge() const;
   void AddLink(uint32_t from, uint32_t to, const Observation& o);
   void AverageInto(Link& link, const Observation& o, bool reversed);
   int FindLink(uint32_t from, uint32_t to) const;
@@ -270,12 +272,11 @@ class ExperienceMap {
   std::optional<ScanLink> last_scan_;
   bool last_scan_kept_ = false;
   // exp_bridge_recognitions: the experience made last (bridge_from_), the robot's odometry since
-  // it in its frame as it was made (x, y), the robot's facing there minus accum_facing_ (which
-  // only a recognition changes), and whether a recognition was taken since. Not saved: a loaded
-  // map starts a bridge at its current experience.
+  // it in its frame as it was made (x, y, time), the robot's facing in that frame minus
+  // accum_facing_ (only a recognition changes it), and whether a recognition was taken since. Not
+  // saved: a loaded map starts a bridge at its current experience.
   uint32_t bridge_from_ = 0;
-  double bridge_from_th_ = 0.0;
-  double bridge_x_ = 0.0, bridge_y_ = 0.0, bridge_turn_ = 0.0, bridge_time_ = 0.0;
+  double bridge_x_ = 0.0, bridge_y_ = 0.0, bridge_time_ = 0.0, bridge_facing_offset_ = 0.0;
   bool bridge_pending_ = false;
   bool graph_pending_ = false;    // links changed since the last least-squares correction
   int frames_since_graph_ = 0;
