@@ -206,6 +206,9 @@ bool ExperienceMap::RefusesRecognition(const ExperienceAction& a) const {
   if (config_.exp_recognition_max_turn_rad > 0 && takes_angle &&
       std::abs(WrapAngle(e.th_rad + a.relative_angle_rad - robot.theta)) > config_.exp_recognition_max_turn_rad)
     return true;
+  if (config_.exp_recognition_max_link_m > 0 && a.kind == ExperienceAction::Kind::kLink &&
+      ObservedFromCurrent(a).d > config_.exp_recognition_max_link_m)
+    return true;
   if (config_.exp_recognition_max_jump_m <= 0) return false;
   const Pose2D placed = Compose(e.pose(), {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
   const double jump = std::hypot(placed.x - robot.x, placed.y - robot.y);

@@ -137,12 +137,13 @@ class ExperienceMap {
   // map unchanged, when ids are inconsistent: kCreate of an id other than the next dense id or
   // from an experience other than the current one; kLink/kSet of unknown ids or from an
   // experience other than the current one; non-finite angle or offset. A recognition too far
-  // from where the map has the robot is refused (exp_recognition_max_jump_m); until the next
-  // create or recognition taken, actions from the refused experience (the pose cells' current)
-  // count as from the current one.
+  // from where the map has the robot, or whose link would be too long, is refused
+  // (exp_recognition_max_jump_m, _max_turn_rad, _max_link_m); until the next create or
+  // recognition taken, actions from the refused experience (the pose cells' current) count as
+  // from the current one.
   void Apply(const ExperienceAction& action);
 
-  // Recognitions refused by exp_recognition_max_jump_m so far (not saved).
+  // Recognitions refused by the gates above so far (not saved).
   uint64_t refused_recognitions() const { return refused_recognitions_; }
   // Headings taken back from past the heading hold's gate (exp_manhattan_recapture_frames).
   uint64_t heading_recaptures() const { return heading_recaptures_; }
@@ -207,8 +208,9 @@ class ExperienceMap {
   double RelaxLink(uint32_t index);
   void SeedLocalRegion(uint32_t a, uint32_t b);
   void ValidateIds(const ExperienceAction& a) const;
-  // exp_recognition_max_jump_m: the recognition `a` (kLink or kSet, ids valid) would move the
-  // robot too far from where the map has it.
+  // exp_recognition_max_jump_m, _max_turn_rad, _max_link_m: the recognition `a` (kLink or kSet,
+  // ids valid) would move or turn the robot too far from where the map has it, or link two places
+  // too far apart.
   bool RefusesRecognition(const ExperienceAction& a) const;
   // exp_scan_links: registers the stretch around experience `a` with the one around the nearest
   // old experience in the map, and keeps a scan link when they agree.

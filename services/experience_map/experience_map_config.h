@@ -71,10 +71,13 @@ struct ExperienceMapConfig {
   // the map, corrected at every recognition, knows the robot to within its drift since the last.
   // 0: every recognition is taken. Likewise one whose facing (the experience's plus the view's
   // relative angle; a kSet's only with exp_set_view_angle) is more than exp_recognition_max_turn_rad
-  // from the robot's (0: any).
+  // from the robot's (0: any). Likewise a kLink whose link would be longer than
+  // exp_recognition_max_link_m (0: any): the view then places the robot far from the place it
+  // recognises, where its offset is least sure, and a link joins two places that far apart.
   double exp_recognition_max_jump_m = 0.0;
   double exp_recognition_jump_per_m = 0.0;
   double exp_recognition_max_turn_rad = 0.0;
+  double exp_recognition_max_link_m = 0.0;
   // The robot's heading held to the building's walls (ExperienceMap::HoldHeading): most walls run
   // along two perpendicular directions (the Manhattan-world assumption). The first
   // exp_manhattan_reference_frames wall directions the odometry reports fix those axes in the
@@ -178,6 +181,8 @@ struct ExperienceMapConfig {
       "... plus this for each metre driven since the last recognition taken");
     v("exp_recognition_max_turn_rad", exp_recognition_max_turn_rad,
       "> 0: a recognition that would turn the robot's facing by more than this is refused (rad)");
+    v("exp_recognition_max_link_m", exp_recognition_max_link_m,
+      "> 0: a recognition whose link would be longer than this is refused (m)");
     v("exp_manhattan", exp_manhattan, "hold the robot's heading to the walls' two perpendicular directions");
     v("exp_manhattan_reference_frames", exp_manhattan_reference_frames, "wall directions that fix the axes at the start");
     v("exp_manhattan_min_offset_rad", exp_manhattan_min_offset_rad,
@@ -246,6 +251,8 @@ struct ExperienceMapConfig {
     Require(std::isfinite(exp_recognition_max_turn_rad) && exp_recognition_max_turn_rad >= 0 &&
                 exp_recognition_max_turn_rad <= std::numbers::pi,
             "exp_recognition_max_turn_rad", "must be in [0, pi]");
+    Require(std::isfinite(exp_recognition_max_link_m) && exp_recognition_max_link_m >= 0,
+            "exp_recognition_max_link_m", "must be >= 0");
     Require(exp_manhattan_reference_frames >= 1, "exp_manhattan_reference_frames", "must be at least 1");
     Require(std::isfinite(exp_manhattan_max_offset_rad) && exp_manhattan_max_offset_rad > 0 &&
                 exp_manhattan_max_offset_rad < std::numbers::pi / 4,

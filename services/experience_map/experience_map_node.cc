@@ -150,8 +150,9 @@ class ExperienceMapNode::Mapper {
       spdlog::info("frame {}: the walls agree the heading drifted {:.3f} rad past the hold's gate: taken out",
                    m.header.frame_seq, *applied.heading_recaptured_rad);
     if (applied.recognition_refused)
-      spdlog::info("frame {}: recognition of experience {} refused: it would move the robot too far from where the "
-                   "map has it (exp_recognition_max_jump_m)",
+      spdlog::info("frame {}: recognition of experience {} refused: it would move or turn the robot too far from "
+                   "where the map has it, or link places too far apart (exp_recognition_max_jump_m, _max_turn_rad, "
+                   "_max_link_m)",
                    m.header.frame_seq, m.experience_id);
     if (!applied.ids_refused.empty())
       context_.Reject("action_ids",

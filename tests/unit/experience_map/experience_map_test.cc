@@ -857,6 +857,57 @@ TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
   ExpectKeysRefused(config, {{"exp_recognition_max_turn_rad", [](ExperienceMapConfig& c) { c.exp_recognition_max_turn_rad = 4; }}});
 }
 
+TEST(ExperienceMap, ARecognitionWhoseLinkWouldJoinPlacesFarApartIsRefused) {
+  ExperienceMapConfig config;
+  config.exp_initial_em_deg = 0;
+  config.exp_recognition_max_link_m = 1.5;
+  config.exp_relax_budget_links = 0;
+  config.exp_loops = 0;
+  const auto drive = [](ExperienceMap& m) {
+    m.Apply(Create(0, kNoExperience));
+    m.Integrate(1.0, 0.0, 1.0);
+    m.Apply(Create(1, 0));  // at (1, 0)
+    m.Integrate(1.0, 0.0, 1.0);
+    m.Apply(Create(2, 1));  // at (2, 0)
+    m.Integrate(-1.0, 0.0, 1.0);  // back at (1, 0)
+  };
+  ExperienceMap map(config);
+  drive(map);
+
+  // Experience 0 seen 1 m ahead of the robot, just where the map has it: the link from
+  // experience 2 to it would be 2 m long. Refused: no link, the robot stays.
+  ExperienceAction far = LinkTo(Kind::kLink, 2, 0);
+  far.offset_x_m = 1.0;
+  map.Apply(far);
+  EXPECT_EQ(map.refused_recognitions(), 1u);
+  EXPECT_EQ(map.links().size(), 2u);
+  EXPECT_EQ(map.current_id(), 2u);
+  EXPECT_NEAR(map.RobotPose().x, 1.0, 1e-9);
+
+  // Experience 1, where the robot stands: 1 m from experience 2, taken (averaged into the link
+  // that made experience 2).
+  map.Apply(LinkTo(Kind::kLink, 0, 1));
+  EXPECT_EQ(map.refused_recognitions(), 1u);
+  EXPECT_EQ(map.links().size(), 2u);
+  EXPECT_EQ(map.current_id(), 1u);
+
+  // A set makes no link, so its length is not judged: experience 0 is taken.
+  map.Apply(LinkTo(Kind::kSet, 1, 0));
+  EXPECT_EQ(map.refused_recognitions(), 1u);
+  EXPECT_EQ(map.current_id(), 0u);
+
+  // Without the key the 2-m link is made.
+  config.exp_recognition_max_link_m = 0;
+  ExperienceMap any(config);
+  drive(any);
+  any.Apply(far);
+  EXPECT_EQ(any.refused_recognitions(), 0u);
+  EXPECT_TRUE(any.links().back().closes_loop);
+  EXPECT_NEAR(any.links().back().d_m, 2.0, 1e-9);
+
+  ExpectKeysRefused(config, {{"exp_recognition_max_link_m", [](ExperienceMapConfig& c) { c.exp_recognition_max_link_m = -0.1; }}});
+}
+
 TEST(ExperienceMap, HeadingThatDriftedPastTheGateIsTakenBackWhenTheWallsAgreeOnIt) {
   // Heading 0.4 rad off the axes, past the gate's 0.3: walls on the axes all come 0.4 off.
   ExperienceMapConfig config = HeldToWalls();
