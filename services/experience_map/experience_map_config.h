@@ -72,8 +72,8 @@ struct ExperienceMapConfig {
   // 0: every recognition is taken. Likewise one whose facing (the experience's plus the view's
   // relative angle; a kSet's only with exp_set_view_angle) is more than exp_recognition_max_turn_rad
   // from the robot's (0: any). Likewise a kLink whose link would be longer than
-  // exp_recognition_max_link_m (0: any): the view then places the robot far from the place it
-  // recognises, where its offset is least sure, and a link joins two places that far apart.
+  // exp_recognition_max_link_m (0: any): a link that long joins two places, not one seen again,
+  // and rests on a view's offset to a place seen from afar, the least sure.
   double exp_recognition_max_jump_m = 0.0;
   double exp_recognition_jump_per_m = 0.0;
   double exp_recognition_max_turn_rad = 0.0;

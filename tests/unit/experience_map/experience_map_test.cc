@@ -746,12 +746,10 @@ TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
 }
 
 TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
-  ExperienceMapConfig config;
+  ExperienceMapConfig config = NoCorrection();  // the experiences stay where they were laid
   config.exp_initial_em_deg = 0;
   config.exp_recognition_max_jump_m = 2.0;
   config.exp_recognition_jump_per_m = 0.5;
-  config.exp_relax_budget_links = 0;
-  config.exp_loops = 0;  // no correction: the experiences stay where they were laid
   ExperienceMap map(config);
   map.Apply(Create(0, kNoExperience));
   map.Integrate(5.0, 0.0, 1.0);
@@ -812,11 +810,9 @@ TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
 }
 
 TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
-  ExperienceMapConfig config;
+  ExperienceMapConfig config = NoCorrection();  // the experiences stay where they were laid
   config.exp_initial_em_deg = 0;
   config.exp_recognition_max_turn_rad = 0.5;
-  config.exp_relax_budget_links = 0;
-  config.exp_loops = 0;
   ExperienceMap map(config);
   map.Apply(Create(0, kNoExperience));
   map.Integrate(1.0, 0.0, 1.0);
@@ -858,11 +854,9 @@ TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
 }
 
 TEST(ExperienceMap, ARecognitionWhoseLinkWouldJoinPlacesFarApartIsRefused) {
-  ExperienceMapConfig config;
+  ExperienceMapConfig config = NoCorrection();  // the experiences stay where they were laid
   config.exp_initial_em_deg = 0;
   config.exp_recognition_max_link_m = 1.5;
-  config.exp_relax_budget_links = 0;
-  config.exp_loops = 0;
   const auto drive = [](ExperienceMap& m) {
     m.Apply(Create(0, kNoExperience));
     m.Integrate(1.0, 0.0, 1.0);
