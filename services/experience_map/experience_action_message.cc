@@ -48,10 +48,9 @@ AppliedAction ApplyActionMessage(ExperienceMap& map, const msg::PoseCellAction& 
     if (map.heading_recaptures() != recaptures_before)
       applied.heading_recaptured_rad = WrapAngle(heading_before - map.RobotPose().theta);
   }
-  const uint64_t refused_before = map.refused_recognitions();
   try {
     map.Apply(FromActionMessage(m));
-    applied.recognition_refused = map.refused_recognitions() != refused_before;
+    applied.recognition_refused = map.last_refusal();
   } catch (const std::invalid_argument& e) {
     applied.ids_refused = e.what();
     map.Apply(ExperienceAction{});

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <limits>
 #include <numbers>
@@ -199,20 +200,48 @@ void ExperienceMap::SetCurrent(uint32_t id, const ExperienceAction& a) {
   accum_facing_ = WrapAngle(th + a.relative_angle_rad);
 }
 
-bool ExperienceMap::RefusesRecognition(const ExperienceAction& a) const {
+std::string ToString(const RecognitionRefusal& refusal) {
+  char line[160];
+  switch (refusal.gate) {
+    case RecognitionRefusal::Gate::kJump:
+      std::snprintf(line, sizeof(line),
+                    "it would move the robot %.2f m from where the map has it "
+                    "(exp_recognition_max_jump_m + _jump_per_m: %.2f m here)",
+                    refusal.value, refusal.limit);
+      break;
+    case RecognitionRefusal::Gate::kTurn:
+      std::snprintf(line, sizeof(line), "it would turn the robot %.2f rad (exp_recognition_max_turn_rad: %.2f)",
+                    refusal.value, refusal.limit);
+      break;
+    case RecognitionRefusal::Gate::kLink:
+      std::snprintf(line, sizeof(line), "its link would be %.2f m long (exp_recognition_max_link_m: %.2f)",
+                    refusal.value, refusal.limit);
+      break;
+  }
+  return line;
+}
+
+std::optional<RecognitionRefusal> ExperienceMap::RefusalOf(const ExperienceAction& a) const {
+  using Gate = RecognitionRefusal::Gate;
   const Experience& e = experiences_[a.experience_id];
   const Pose2D robot = RobotPose();
   const bool takes_angle = a.kind == ExperienceAction::Kind::kLink || config_.exp_set_view_angle;
-  if (config_.exp_recognition_max_turn_rad > 0 && takes_angle &&
-      std::abs(WrapAngle(e.th_rad + a.relative_angle_rad - robot.theta)) > config_.exp_recognition_max_turn_rad)
-    return true;
-  if (config_.exp_recognition_max_link_m > 0 && a.kind == ExperienceAction::Kind::kLink &&
-      ObservedFromCurrent(a).d > config_.exp_recognition_max_link_m)
-    return true;
-  if (config_.exp_recognition_max_jump_m <= 0) return false;
+  if (config_.exp_recognition_max_turn_rad > 0 && takes_angle) {
+    const double turn = std::abs(WrapAngle(e.th_rad + a.relative_angle_rad - robot.theta));
+    if (turn > config_.exp_recognition_max_turn_rad)
+      return RecognitionRefusal{Gate::kTurn, turn, config_.exp_recognition_max_turn_rad};
+  }
+  if (config_.exp_recognition_max_link_m > 0 && a.kind == ExperienceAction::Kind::kLink) {
+    const double length = ObservedFromCurrent(a).d;
+    if (length > config_.exp_recognition_max_link_m)
+      return RecognitionRefusal{Gate::kLink, length, config_.exp_recognition_max_link_m};
+  }
+  if (config_.exp_recognition_max_jump_m <= 0) return std::nullopt;
   const Pose2D placed = Compose(e.pose(), {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
   const double jump = std::hypot(placed.x - robot.x, placed.y - robot.y);
-  return jump > config_.exp_recognition_max_jump_m + config_.exp_recognition_jump_per_m * driven_since_recognition_m_;
+  const double allowed = config_.exp_recognition_max_jump_m + config_.exp_recognition_jump_per_m * driven_since_recognition_m_;
+  if (jump > allowed) return RecognitionRefusal{Gate::kJump, jump, allowed};
+  return std::nullopt;
 }
 
 void ExperienceMap::ValidateIds(const ExperienceAction& a) const {
@@ -253,6 +282,7 @@ void ExperienceMap::ValidateIds(const ExperienceAction& a) const {
 
 void ExperienceMap::Apply(const ExperienceAction& a) {
   ValidateIds(a);
+  last_refusal_.reset();
   switch (a.kind) {
     case ExperienceAction::Kind::kNone:
       break;
@@ -300,7 +330,8 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         pose_cells_current_.reset();
         break;
       }
-      if (RefusesRecognition(a)) {
+      last_refusal_ = RefusalOf(a);
+      if (last_refusal_) {
         pose_cells_current_ = to;
         ++refused_recognitions_;
         break;

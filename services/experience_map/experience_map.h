@@ -36,6 +36,7 @@
 #include <numbers>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "common/math/angle.h"
@@ -90,6 +91,19 @@ struct PoseGraphResult {
   bool converged = false;       // the last step moved nothing by more than stop_below
 };
 
+// Why a recognition was refused: the gate (exp_recognition_max_jump_m with _jump_per_m,
+// _max_turn_rad, _max_link_m), how far the recognition would have moved or turned the robot or
+// how long its link would have been (m or rad), and the gate's limit then.
+struct RecognitionRefusal {
+  enum class Gate { kJump, kTurn, kLink };
+  Gate gate = Gate::kJump;
+  double value = 0.0;
+  double limit = 0.0;
+};
+// One line for the log, naming the gate's key: "it would move the robot 5.10 m from where the map
+// has it (exp_recognition_max_jump_m + _jump_per_m: 4.30 m here)".
+std::string ToString(const RecognitionRefusal& refusal);
+
 // A pair of experiences known to be the same place when merging two maps.
 struct MapAnchor {
   uint32_t this_id = 0;
@@ -143,8 +157,9 @@ class ExperienceMap {
   // from the current one.
   void Apply(const ExperienceAction& action);
 
-  // Recognitions refused by the gates above so far (not saved).
+  // Recognitions refused by the gates above so far (not saved), and the one the last Apply refused.
   uint64_t refused_recognitions() const { return refused_recognitions_; }
+  const std::optional<RecognitionRefusal>& last_refusal() const { return last_refusal_; }
   // Headings taken back from past the heading hold's gate (exp_manhattan_recapture_frames).
   uint64_t heading_recaptures() const { return heading_recaptures_; }
   // After a refused recognition, the experience the pose cells take for current (the map keeps
@@ -208,10 +223,10 @@ class ExperienceMap {
   double RelaxLink(uint32_t index);
   void SeedLocalRegion(uint32_t a, uint32_t b);
   void ValidateIds(const ExperienceAction& a) const;
-  // exp_recognition_max_jump_m, _max_turn_rad, _max_link_m: the recognition `a` (kLink or kSet,
-  // ids valid) would move or turn the robot too far from where the map has it, or link two places
-  // too far apart.
-  bool RefusesRecognition(const ExperienceAction& a) const;
+  // exp_recognition_max_jump_m, _max_turn_rad, _max_link_m: why the recognition `a` (kLink or
+  // kSet, ids valid) is refused, if it would move or turn the robot too far from where the map has
+  // it, or link two places too far apart.
+  std::optional<RecognitionRefusal> RefusalOf(const ExperienceAction& a) const;
   // exp_scan_links: registers the stretch around experience `a` with the one around the nearest
   // old experience in the map, and keeps a scan link when they agree.
   void TryScanLink(uint32_t a);
@@ -266,6 +281,7 @@ class ExperienceMap {
   double driven_since_recognition_m_ = 0.0;
   std::optional<uint32_t> pose_cells_current_;
   uint64_t refused_recognitions_ = 0;
+  std::optional<RecognitionRefusal> last_refusal_;
   uint64_t heading_recaptures_ = 0;
   std::vector<ScanLink> scan_links_;
   uint64_t scan_registrations_ = 0;  // not saved

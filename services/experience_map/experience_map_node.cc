@@ -150,10 +150,8 @@ class ExperienceMapNode::Mapper {
       spdlog::info("frame {}: the walls agree the heading drifted {:.3f} rad past the hold's gate: taken out",
                    m.header.frame_seq, *applied.heading_recaptured_rad);
     if (applied.recognition_refused)
-      spdlog::info("frame {}: recognition of experience {} refused: it would move or turn the robot too far from "
-                   "where the map has it, or link places too far apart (exp_recognition_max_jump_m, _max_turn_rad, "
-                   "_max_link_m)",
-                   m.header.frame_seq, m.experience_id);
+      spdlog::info("frame {}: recognition of experience {} refused: {}", m.header.frame_seq, m.experience_id,
+                   ToString(*applied.recognition_refused));
     if (!applied.ids_refused.empty())
       context_.Reject("action_ids",
                       "action " + std::to_string(m.action_seq) + " (" + msg::ToString(m.kind) + "): " + applied.ids_refused);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <filesystem>
 #include <fstream>
@@ -745,6 +746,24 @@ TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
                      {"exp_manhattan_reference_frames", [](ExperienceMapConfig& c) { c.exp_manhattan_reference_frames = 0; }}});
 }
 
+// The last Apply refused a recognition at `gate`, which it would have passed by `value` against
+// `limit`; its log line names `key` and both figures.
+void ExpectRefusal(const ExperienceMap& map, RecognitionRefusal::Gate gate, double value, double limit,
+                   const std::string& key) {
+  ASSERT_TRUE(map.last_refusal().has_value());
+  const RecognitionRefusal& r = *map.last_refusal();
+  EXPECT_EQ(r.gate, gate);
+  EXPECT_NEAR(r.value, value, 1e-9);
+  EXPECT_NEAR(r.limit, limit, 1e-9);
+  const std::string line = ToString(r);
+  char figures[32];
+  std::snprintf(figures, sizeof(figures), "%.2f", value);
+  EXPECT_NE(line.find(figures), std::string::npos) << line;
+  std::snprintf(figures, sizeof(figures), "%.2f", limit);
+  EXPECT_NE(line.find(figures), std::string::npos) << line;
+  EXPECT_NE(line.find(key), std::string::npos) << line;
+}
+
 TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
   ExperienceMapConfig config = NoCorrection();  // the experiences stay where they were laid
   config.exp_initial_em_deg = 0;
@@ -763,6 +782,7 @@ TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
   // experience (0) is accepted as the origin of their next action, which the map takes from its own.
   map.Apply(LinkTo(Kind::kLink, 2, 0));
   EXPECT_EQ(map.refused_recognitions(), 1u);
+  ExpectRefusal(map, RecognitionRefusal::Gate::kJump, 11.0, 7.5, "exp_recognition_max_jump_m");
   EXPECT_EQ(map.links().size(), 2u);
   EXPECT_EQ(map.current_id(), 2u);
   EXPECT_EQ(map.pose_cells_current(), std::optional<uint32_t>(0));
@@ -786,6 +806,7 @@ TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
   // again from 2 m.
   map.Apply(LinkTo(Kind::kLink, 3, 1));
   EXPECT_EQ(map.refused_recognitions(), 1u);
+  EXPECT_FALSE(map.last_refusal().has_value());
   EXPECT_TRUE(map.links().back().closes_loop);
   EXPECT_EQ(map.current_id(), 1u);
   EXPECT_NEAR(map.RobotPose().x, 5.0, 1e-9);
@@ -827,6 +848,7 @@ TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
   // the robot's pose unchanged.
   map.Apply(LinkTo(Kind::kLink, 2, 0));
   EXPECT_EQ(map.refused_recognitions(), 1u);
+  ExpectRefusal(map, RecognitionRefusal::Gate::kTurn, kPi, 0.5, "exp_recognition_max_turn_rad");
   EXPECT_EQ(map.current_id(), 2u);
   EXPECT_EQ(map.pose_cells_current(), std::optional<uint32_t>(0));
   EXPECT_NEAR(map.RobotPose().theta, kPi, 1e-9);
@@ -874,6 +896,7 @@ TEST(ExperienceMap, ARecognitionWhoseLinkWouldJoinPlacesFarApartIsRefused) {
   far.offset_x_m = 1.0;
   map.Apply(far);
   EXPECT_EQ(map.refused_recognitions(), 1u);
+  ExpectRefusal(map, RecognitionRefusal::Gate::kLink, 2.0, 1.5, "exp_recognition_max_link_m");
   EXPECT_EQ(map.links().size(), 2u);
   EXPECT_EQ(map.current_id(), 2u);
   EXPECT_NEAR(map.RobotPose().x, 1.0, 1e-9);
