@@ -16,9 +16,10 @@ ExperienceAction FromActionMessage(const msg::PoseCellAction& message);
 
 // What ApplyActionMessage did beyond the map's own bookkeeping, for the service's log.
 struct AppliedAction {
-  bool axes_fixed = false;                                // this frame's wall direction fixed the building's axes
-  std::optional<double> heading_recaptured_rad;           // the heading taken back from past the hold's gate by this much
-  std::optional<RecognitionRefusal> recognition_refused;  // by a gate of exp_recognition_max_*
+  bool axes_fixed = false;                       // this frame's wall direction fixed the building's axes
+  std::optional<double> heading_recaptured_rad;  // the heading taken back from past the hold's gate by this much
+  // The recognition a gate of exp_recognition_max_* refused, and why.
+  std::optional<RecognitionRefusal> recognition_refused;
   std::string ids_refused;  // non-empty: why the action's ids did not fit (an empty action was applied instead)
 };
 

@@ -239,7 +239,8 @@ std::optional<RecognitionRefusal> ExperienceMap::RefusalOf(const ExperienceActio
   if (config_.exp_recognition_max_jump_m <= 0) return std::nullopt;
   const Pose2D placed = Compose(e.pose(), {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
   const double jump = std::hypot(placed.x - robot.x, placed.y - robot.y);
-  const double allowed = config_.exp_recognition_max_jump_m + config_.exp_recognition_jump_per_m * driven_since_recognition_m_;
+  const double allowed =
+      config_.exp_recognition_max_jump_m + config_.exp_recognition_jump_per_m * driven_since_recognition_m_;
   if (jump > allowed) return RecognitionRefusal{Gate::kJump, jump, allowed};
   return std::nullopt;
 }
