@@ -221,7 +221,7 @@ std::string ToString(const RecognitionRefusal& refusal) {
   return line;
 }
 
-std::optional<RecognitionRefusal> ExperienceMap::RefusalOf(const ExperienceAction& a) const {
+std::optional<RecognitionRefusal> ExperienceMap::RefusalOf(const ExperienceAction& a, double link_m) const {
   using Gate = RecognitionRefusal::Gate;
   const Experience& e = experiences_[a.experience_id];
   const Pose2D robot = RobotPose();
@@ -231,10 +231,9 @@ std::optional<RecognitionRefusal> ExperienceMap::RefusalOf(const ExperienceActio
     if (turn > config_.exp_recognition_max_turn_rad)
       return RecognitionRefusal{Gate::kTurn, turn, config_.exp_recognition_max_turn_rad};
   }
-  if (config_.exp_recognition_max_link_m > 0 && a.kind == ExperienceAction::Kind::kLink) {
-    const double length = ObservedFromCurrent(a).d;
-    if (length > config_.exp_recognition_max_link_m)
-      return RecognitionRefusal{Gate::kLink, length, config_.exp_recognition_max_link_m};
+  if (config_.exp_recognition_max_link_m > 0 && a.kind == ExperienceAction::Kind::kLink &&
+      link_m > config_.exp_recognition_max_link_m) {
+    return RecognitionRefusal{Gate::kLink, link_m, config_.exp_recognition_max_link_m};
   }
   if (config_.exp_recognition_max_jump_m <= 0) return std::nullopt;
   const Pose2D placed = Compose(e.pose(), {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
@@ -331,7 +330,13 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         pose_cells_current_.reset();
         break;
       }
-      last_refusal_ = RefusalOf(a);
+      const bool link_kind = a.kind == ExperienceAction::Kind::kLink;
+      ExperienceAction recognised = a;
+      if (!link_kind && !config_.exp_set_view_angle) {  // the angle at which nothing turns
+        recognised.relative_angle_rad = WrapAngle(accum_facing_ - experiences_[to].th_rad);
+      }
+      const Observation o = ObservedFromCurrent(recognised);
+      last_refusal_ = RefusalOf(a, o.d);
       if (last_refusal_) {
         pose_cells_current_ = to;
         ++refused_recognitions_;
@@ -339,12 +344,6 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       }
       pose_cells_current_.reset();
       driven_since_recognition_m_ = 0.0;
-      const bool link_kind = a.kind == ExperienceAction::Kind::kLink;
-      ExperienceAction recognised = a;
-      if (!link_kind && !config_.exp_set_view_angle) {  // the angle at which nothing turns
-        recognised.relative_angle_rad = WrapAngle(accum_facing_ - experiences_[to].th_rad);
-      }
-      const Observation o = ObservedFromCurrent(recognised);
       bool changed = false;
       if (link_kind || config_.exp_average_repeated_links) {
         if (const int fwd = FindLink(current_, to); fwd >= 0) {
@@ -765,13 +764,13 @@ proto::ExperienceMap ExperienceMap::Save() const {
     p->set_closes_loop(l.closes_loop);
   };
   for (const Link& l : links_) save_link(l, m.add_links());
-  for (const ScanLink& l : scan_links_) {
-    proto::ScanLink* p = m.add_scan_links();
+  const auto save_scan = [&](const ScanLink& l, proto::ScanLink* p) {
     save_link(l.link, p->mutable_link());
     p->set_walls_xx(l.walls(0, 0));
     p->set_walls_xy(l.walls(0, 1));
     p->set_walls_yy(l.walls(1, 1));
-  }
+  };
+  for (const ScanLink& l : scan_links_) save_scan(l, m.add_scan_links());
   m.set_has_current(has_current_);
   m.set_current_id(current_);
   m.set_accum_x_m(accum_x_);
@@ -790,6 +789,25 @@ proto::ExperienceMap ExperienceMap::Save() const {
   m.set_has_pose_cells_current(pose_cells_current_.has_value());
   m.set_pose_cells_current_id(pose_cells_current_.value_or(0));
   m.set_driven_since_recognition_m(driven_since_recognition_m_);
+  m.set_turned_since_hold_rad(turned_since_hold_rad_);
+  for (const auto& [offset, turned] : offsets_outside_gate_) {
+    m.add_outside_gate_offset_rad(offset);
+    m.add_outside_gate_turned_rad(turned);
+  }
+  proto::Bridge* bridge = m.mutable_bridge();
+  bridge->set_from_id(bridge_from_);
+  bridge->set_x_m(bridge_x_);
+  bridge->set_y_m(bridge_y_);
+  bridge->set_time_s(bridge_time_);
+  bridge->set_facing_offset_rad(bridge_facing_offset_);
+  bridge->set_pending(bridge_pending_);
+  if (last_scan_) save_scan(*last_scan_, m.mutable_last_scan());
+  m.set_last_scan_kept(last_scan_kept_);
+  m.set_graph_pending(graph_pending_);
+  m.set_frames_since_graph(static_cast<uint32_t>(frames_since_graph_));
+  m.set_refused_recognitions(refused_recognitions_);
+  m.set_heading_recaptures(heading_recaptures_);
+  m.set_scan_registrations(scan_registrations_);
   return m;
 }
 
@@ -816,9 +834,31 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
     }
   };
   for (const auto& l : m.links()) check_link(l);
-  for (const auto& l : m.scan_links()) {
+  const auto check_scan = [&](const proto::ScanLink& l) {
     check_link(l.link());
     if (!finite({l.walls_xx(), l.walls_xy(), l.walls_yy()})) Reject("saved scan link's walls are not finite");
+  };
+  for (const auto& l : m.scan_links()) check_scan(l);
+  if (m.has_last_scan()) check_scan(m.last_scan());
+  if (m.has_turned_since_hold_rad() && !(m.turned_since_hold_rad() >= 0)) {
+    Reject("saved turn since the last heading hold is not a number or negative");
+  }
+  if (m.outside_gate_offset_rad_size() != m.outside_gate_turned_rad_size() ||
+      !std::all_of(m.outside_gate_offset_rad().begin(), m.outside_gate_offset_rad().end(),
+                   [](double v) { return std::isfinite(v); }) ||
+      !std::all_of(m.outside_gate_turned_rad().begin(), m.outside_gate_turned_rad().end(),
+                   [](double v) { return v >= 0; })) {
+    Reject("saved wall offsets past the heading gate are not finite pairs");
+  }
+  if (m.frames_since_graph() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
+    Reject("saved frames since the least-squares correction out of range");
+  }
+  if (m.has_bridge()) {
+    const proto::Bridge& b = m.bridge();
+    if (b.from_id() >= std::max<uint32_t>(n, 1)) Reject("saved bridge starts at an unknown experience");
+    if (!finite({b.x_m(), b.y_m(), b.time_s(), b.facing_offset_rad()}) || b.time_s() < 0) {
+      Reject("saved bridge has invalid numbers");
+    }
   }
   if (m.has_current() && m.current_id() >= n) Reject("saved current experience is unknown");
   if (!m.has_current() && n > 0) Reject("saved map has experiences but no current one");
@@ -857,12 +897,16 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   }
   scan_links_.clear();
   last_scan_.reset();
-  for (const auto& p : m.scan_links()) {
+  const auto load_scan = [](const proto::ScanLink& p) {
     const proto::Link& l = p.link();
-    ScanLink& scan = scan_links_.emplace_back();
+    ScanLink scan;
     scan.link = {l.from_id(), l.to_id(), l.d_m(), l.heading_rad(), l.facing_rad(), 0.0, 1, false};
     scan.walls << p.walls_xx(), p.walls_xy(), p.walls_xy(), p.walls_yy();
-  }
+    return scan;
+  };
+  for (const auto& p : m.scan_links()) scan_links_.push_back(load_scan(p));
+  if (m.has_last_scan()) last_scan_ = load_scan(m.last_scan());
+  last_scan_kept_ = m.last_scan_kept();
   has_current_ = m.has_current();
   current_ = m.current_id();
   accum_x_ = m.accum_x_m();
@@ -876,10 +920,31 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   manhattan_axes_ = m.has_manhattan_axes() ? std::optional(m.manhattan_axes_rad()) : std::nullopt;
   manhattan_reference_ = {m.manhattan_sum_cos(), m.manhattan_sum_sin()};
   manhattan_count_ = static_cast<int>(m.manhattan_count());
-  turned_since_hold_rad_ = std::numeric_limits<double>::max();  // the gate wide open
+  // An older file, without it: the gate wide open.
+  turned_since_hold_rad_ =
+      m.has_turned_since_hold_rad() ? m.turned_since_hold_rad() : std::numeric_limits<double>::max();
+  offsets_outside_gate_.clear();
+  for (int i = 0; i < m.outside_gate_offset_rad_size(); ++i)
+    offsets_outside_gate_.emplace_back(m.outside_gate_offset_rad(i), m.outside_gate_turned_rad(i));
   pose_cells_current_ = m.has_pose_cells_current() ? std::optional(m.pose_cells_current_id()) : std::nullopt;
   driven_since_recognition_m_ = m.driven_since_recognition_m();
-  StartBridge();
+  if (m.has_bridge()) {
+    const proto::Bridge& b = m.bridge();
+    bridge_from_ = b.from_id();
+    bridge_x_ = b.x_m();
+    bridge_y_ = b.y_m();
+    bridge_time_ = b.time_s();
+    bridge_facing_offset_ = b.facing_offset_rad();
+    bridge_pending_ = b.pending();
+  } else {
+    StartBridge();
+  }
+  graph_pending_ = m.graph_pending();
+  frames_since_graph_ = static_cast<int>(m.frames_since_graph());
+  refused_recognitions_ = m.refused_recognitions();
+  heading_recaptures_ = m.heading_recaptures();
+  scan_registrations_ = m.scan_registrations();
+  last_refusal_.reset();
 }
 
 }  // namespace rslam::experience_map

@@ -157,7 +157,7 @@ class ExperienceMap {
   // from the current one.
   void Apply(const ExperienceAction& action);
 
-  // Recognitions refused by the gates above so far (not saved), and the one the last Apply refused.
+  // Recognitions refused by the gates above so far, and the one the last Apply refused.
   uint64_t refused_recognitions() const { return refused_recognitions_; }
   const std::optional<RecognitionRefusal>& last_refusal() const { return last_refusal_; }
   // Headings taken back from past the heading hold's gate (exp_manhattan_recapture_frames).
@@ -224,9 +224,9 @@ class ExperienceMap {
   void SeedLocalRegion(uint32_t a, uint32_t b);
   void ValidateIds(const ExperienceAction& a) const;
   // exp_recognition_max_jump_m, _max_turn_rad, _max_link_m: why the recognition `a` (kLink or
-  // kSet, ids valid) is refused, if it would move or turn the robot too far from where the map has
-  // it, or link two places too far apart.
-  std::optional<RecognitionRefusal> RefusalOf(const ExperienceAction& a) const;
+  // kSet, ids valid) whose link would be link_m long is refused, if it would move or turn the
+  // robot too far from where the map has it, or link two places too far apart.
+  std::optional<RecognitionRefusal> RefusalOf(const ExperienceAction& a, double link_m) const;
   // exp_scan_links: registers the stretch around experience `a` with the one around the nearest
   // old experience in the map, and keeps a scan link when they agree.
   void TryScanLink(uint32_t a);
@@ -271,11 +271,10 @@ class ExperienceMap {
   QuarterTurnMean manhattan_reference_;
   int manhattan_count_ = 0;
   // Turned (rad, summed absolute) since a wall direction last held the heading: widens the gate.
-  // A loaded map starts with the gate wide open (its heading's history is not saved).
+  // A map saved without it (an older file) loads with the gate wide open.
   double turned_since_hold_rad_ = 0.0;
   // exp_manhattan_recapture_frames: the wall directions' offsets from the axes since the last hold
-  // (at most that many, the latest), each with turned_since_hold_rad_ when it came. Not saved: a
-  // loaded map gathers them afresh.
+  // (at most that many, the latest), each with turned_since_hold_rad_ when it came.
   std::deque<std::pair<double, double>> offsets_outside_gate_;
   // exp_recognition_max_jump_m: metres driven since the last recognition taken (or the start).
   double driven_since_recognition_m_ = 0.0;
@@ -284,15 +283,15 @@ class ExperienceMap {
   std::optional<RecognitionRefusal> last_refusal_;
   uint64_t heading_recaptures_ = 0;
   std::vector<ScanLink> scan_links_;
-  uint64_t scan_registrations_ = 0;  // not saved
+  uint64_t scan_registrations_ = 0;
   // exp_scan_confirm_ids: the latest registration kept or waiting for another to confirm it, and
-  // whether it is kept. Not saved: a loaded map waits for two again.
+  // whether it is kept.
   std::optional<ScanLink> last_scan_;
   bool last_scan_kept_ = false;
   // exp_bridge_recognitions: the experience made last (bridge_from_), the robot's odometry since
   // it in its frame as it was made (x, y, time), the robot's facing in that frame minus
-  // accum_facing_ (only a recognition changes it), and whether a recognition was taken since. Not
-  // saved: a loaded map starts a bridge at its current experience.
+  // accum_facing_ (only a recognition changes it), and whether a recognition was taken since. A
+  // map saved without it (an older file) loads with a bridge started at its current experience.
   uint32_t bridge_from_ = 0;
   double bridge_x_ = 0.0, bridge_y_ = 0.0, bridge_time_ = 0.0, bridge_facing_offset_ = 0.0;
   bool bridge_pending_ = false;

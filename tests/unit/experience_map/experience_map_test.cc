@@ -1025,10 +1025,17 @@ TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurn
   map.HoldHeading(wall_at(0.28));
   EXPECT_NEAR(map.RobotPose().theta, WrapAngle(0.96 - 5.0 - 0.056), 1e-12);
 
-  // A loaded map does not know how far its heading drifted: the gate starts wide open.
+  // A loaded map goes on with the gate as it was: narrow again after that hold.
   ExperienceMap loaded(config);
   loaded.Load(map.Save());
   const double before = loaded.RobotPose().theta;
+  loaded.HoldHeading(0.28 - before);
+  EXPECT_NEAR(loaded.RobotPose().theta, before, 1e-12);
+  // A map file from before the gate was saved does not say how far its heading drifted: the gate
+  // starts wide open.
+  proto::ExperienceMap old_file = map.Save();
+  old_file.clear_turned_since_hold_rad();
+  loaded.Load(old_file);
   loaded.HoldHeading(0.28 - before);
   EXPECT_NEAR(loaded.RobotPose().theta, before - 0.056, 1e-12);
 
