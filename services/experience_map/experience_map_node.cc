@@ -49,13 +49,25 @@ class ExperienceMapNode::Mapper {
 
   ~Mapper() { StopIdleThread(); }
 
-  // Stops processing, then saves the state (and the user's map file).
+  // Stops processing, publishes the map if the last snapshot is behind it (so its subscribers end
+  // with the final map), then saves the state (and the user's map file).
   void Stop() {
+    bool published = false;
     {
       std::lock_guard lock(mutex_);
       stopped_ = true;
+      try {
+        if (SnapshotBehind()) {
+          PublishMap();
+          published = true;
+        }
+      } catch (const std::exception& e) {
+        spdlog::error("could not publish the final map: {}", e.what());
+      }
     }
     StopIdleThread();
+    if (published && !map_pub_->WaitForAcknowledgments(std::chrono::seconds(1)))
+      spdlog::warn("the final map was published but not every subscriber acknowledged it within 1 s");
     SaveState(/*force=*/false);
     if (!config_.save_map.empty()) {
       try {

@@ -281,6 +281,21 @@ TEST_F(ExperienceMapServiceTest, SavedMapFileLoadsIntoANewServiceAndItsSnapshot)
   EXPECT_EQ(map->links.size(), reference.links.size());
 }
 
+TEST_F(ExperienceMapServiceTest, TheFinalMapIsPublishedOnStop) {
+  // No snapshot while it runs: neither the action count nor the idle time reaches its period.
+  auto service = Start({"--set", "experience_map.map_publish_period_frames=100000", "--set",
+                        "experience_map.idle_publish_s=60"});
+  const auto actions = testing::ScriptedActions(testing::ScriptedLoop(20));
+  for (const auto& a : actions) action_pub_->Publish(a);
+  ASSERT_EQ(AwaitPoses(actions.size()).size(), actions.size()) << service->Output();
+  EXPECT_FALSE(map_sub_->TakeOne(300ms)) << "a snapshot while running";
+  service->Signal(SIGTERM);
+  ASSERT_EQ(service->WaitExit(10s), std::optional<int>(0)) << service->Output();
+  const auto map = AwaitMap([&](const msg::ExperienceMap& m) { return m.action_seq == actions.size() - 1; }, 2s);
+  ASSERT_TRUE(map) << service->Output();
+  EXPECT_EQ(map->experiences.size(), testing::ApplyAll(actions).experiences);
+}
+
 TEST_F(ExperienceMapServiceTest, CorruptStateFileIsRefusedAtStart) {
   std::ofstream(state_dir_.path() / "experience_map.pb") << "not a state file";
   const auto [code, output] = testing::RunToExit(
