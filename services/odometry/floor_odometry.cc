@@ -86,6 +86,7 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
     moving = true;
     ++still_run_;
   }
+  const bool after_straight_move = was_moving_;
   was_moving_ = moving && straight;
   PlanarMotion prior = given_prior;
   if (frames_since_moving_dx_ >= 0) ++frames_since_moving_dx_;
@@ -140,8 +141,11 @@ PlanarMotion FloorOdometry::Update(std::span<const Eigen::Vector2d> boundary, co
     last_motion_ = out;
     // A still prior taken as moving that registers standing still ends the motion.
     if (still_run_ > 0 && std::abs(out.dx) < 0.5 * coast_dx) was_moving_ = false;
-    // The speed comes from frames the prior itself calls moving, straight (a turn's step is no speed).
-    if (given_prior.dx != 0.0 && std::abs(out.dtheta) < config_.straight_max_turn_rad) RecordMovingStep(out.dx);
+    // The speed comes from forward steps of frames the prior itself calls moving, straight, after
+    // a straight moving frame: a turn's step is no speed, nor the camera settling as a turn ends.
+    if (given_prior.dx != 0.0 && after_straight_move && out.dx > 0 &&
+        std::abs(out.dtheta) < config_.straight_max_turn_rad)
+      RecordMovingStep(out.dx);
   } else {
     key_to_robot_ = Compose(previous, prior.dx, prior.dy, prior.dtheta);
   }

@@ -24,8 +24,9 @@
 // The caller's prior says whether the robot moves forward (the column profiles see that well, but
 // not how fast): while it does, the forward step seeded into the registration, and returned when a
 // frame cannot be registered, is the median of the last coast_speed_steps registered forward steps of
-// straight frames the prior calls moving (constant velocity; one odd registration, or a turn's
-// step, does not set the speed) if the newest is at most coast_frames old, else the prior's own.
+// straight frames the prior calls moving, each after such a frame (constant velocity; one odd
+// registration, a turn's step or the camera settling as a turn ends does not set the speed) if
+// the newest is at most coast_frames old, else the prior's own.
 // A still prior (dx 0) that does not turn, right after moving frames, is taken as moving for up
 // to coast_still_frames frames unless a registration measures the robot standing (less than
 // half the coasting step): driving straight past a plain wall,

@@ -192,6 +192,31 @@ TEST(FloorOdometryTest, ATurnsRegisteredStepsDoNotSetTheCoastingSpeed) {
   EXPECT_NEAR(odometry.Update(none, moving).dx, 0.03, 1e-3);
 }
 
+// Demo runs V1-V10 (session 51): at the end of the start's turn on the spot the profiles still
+// called the robot moving, the camera's settling registered 2.5 mm backwards, and that one step
+// was the coasting speed until the next registration: the robot dead-reckoned backwards for the
+// first metre it drove across open floor.
+TEST(FloorOdometryTest, NeitherAStepRightAfterATurnNorABackwardOneSetsTheCoastingSpeed) {
+  const std::vector<Eigen::Vector2d> none;
+  {
+    FloorOdometry odometry(Config());
+    PlanarMotion turning = MovingPrior();
+    turning.dtheta = 0.05;
+    for (int i = 0; i <= 3; ++i) odometry.Update(BoxRoomView(-0.2, 0.0, 0.05 * i, 1.5, 1.0), turning);
+    const PlanarMotion settling = odometry.Update(BoxRoomView(-0.2025, 0.0, 0.15, 1.5, 1.0), MovingPrior());
+    ASSERT_TRUE(settling.measured);
+    EXPECT_NEAR(settling.dx, -0.0025, 1e-3);
+    // Across open floor no speed is known yet: the prior's own, not the settling step.
+    EXPECT_DOUBLE_EQ(odometry.Update(none, MovingPrior()).dx, MovingPrior().dx);
+  }
+  {
+    FloorOdometry odometry(Config());
+    const std::vector<double> back(5, -0.01);  // straight frames the prior calls moving
+    DriveRegistered(odometry, back);
+    EXPECT_DOUBLE_EQ(odometry.Update(none, MovingPrior()).dx, MovingPrior().dx);
+  }
+}
+
 TEST(FloorOdometryTest, TooFewPointsOrBadInputAreHandled) {
   FloorOdometry odometry(Config());
   const std::vector<Eigen::Vector2d> few = {{1.0, 0.0}, {1.0, 0.1}};
