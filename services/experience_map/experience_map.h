@@ -200,6 +200,7 @@ class ExperienceMap {
   double MaxLinkError() const;
   const ExperienceMapConfig& config() const { return config_; }
 
+  // The whole state: a map loaded from it goes on exactly as this one would (scratch aside).
   proto::ExperienceMap Save() const;
   // Replaces the map; throws std::invalid_argument (map unchanged) when the message is
   // inconsistent (unknown ids, non-finite numbers).

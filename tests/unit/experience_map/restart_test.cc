@@ -112,13 +112,26 @@ std::vector<Frame> ThreeLaps() {
   return frames;
 }
 
-TEST(ExperienceMapRestart, ALoadedMapGoesOnExactlyAsTheOneNeverStopped) {
+ExperienceMapConfig DemoConfig() {
   ExperienceMapNodeConfig demo;
   LoadConfigSection(LoadYamlFile(RSLAM_SOURCE_DIR "/deploy/config/demo.yaml"), "experience_map", demo);
+  return demo.map;
+}
+
+// The demo's map halfway round ThreeLaps, saved.
+proto::ExperienceMap SavedHalfway() {
+  const std::vector<Frame> frames = ThreeLaps();
+  ExperienceMap map(DemoConfig());
+  for (size_t i = 0; i < frames.size() / 2; ++i) Feed(map, frames[i]);
+  return map.Save();
+}
+
+TEST(ExperienceMapRestart, ALoadedMapGoesOnExactlyAsTheOneNeverStopped) {
+  const ExperienceMapConfig config = DemoConfig();
   const std::vector<Frame> frames = ThreeLaps();
 
   // The uninterrupted run, saved every 11th frame as the service's state file would be.
-  ExperienceMap whole(demo.map);
+  ExperienceMap whole(config);
   std::vector<std::pair<size_t, proto::ExperienceMap>> saved;
   for (size_t i = 0; i < frames.size(); ++i) {
     if (i % 11 == 0) saved.emplace_back(i, whole.Save());
@@ -135,7 +148,7 @@ TEST(ExperienceMapRestart, ALoadedMapGoesOnExactlyAsTheOneNeverStopped) {
   const std::string end = whole.Save().SerializeAsString();
 
   for (const auto& [at, state] : saved) {
-    ExperienceMap restarted(demo.map);
+    ExperienceMap restarted(config);
     restarted.Load(state);
     for (size_t i = at; i < frames.size(); ++i) Feed(restarted, frames[i]);
     ASSERT_EQ(restarted.Save().SerializeAsString(), end) << "restarted at frame " << at << " of " << frames.size();
@@ -146,35 +159,26 @@ TEST(ExperienceMapRestart, ALoadedMapGoesOnExactlyAsTheOneNeverStopped) {
 }
 
 TEST(ExperienceMapRestart, AMapFileWithoutTheRestartStateLoadsAsBefore) {
-  ExperienceMapNodeConfig demo;
-  LoadConfigSection(LoadYamlFile(RSLAM_SOURCE_DIR "/deploy/config/demo.yaml"), "experience_map", demo);
-  const std::vector<Frame> frames = ThreeLaps();
-  ExperienceMap map(demo.map);
-  for (size_t i = 0; i < frames.size() / 2; ++i) Feed(map, frames[i]);
-  proto::ExperienceMap old = map.Save();
+  const proto::ExperienceMap saved = SavedHalfway();
+  proto::ExperienceMap old = saved;
   for (int field : {22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32}) {
     const auto* descriptor = proto::ExperienceMap::descriptor()->FindFieldByNumber(field);
     ASSERT_NE(descriptor, nullptr) << field;
     old.GetReflection()->ClearField(&old, descriptor);
   }
-  ExperienceMap loaded(demo.map);
+  ExperienceMap loaded(DemoConfig());
   loaded.Load(old);
-  EXPECT_EQ(loaded.experiences().size(), map.experiences().size());
+  EXPECT_EQ(loaded.experiences().size(), static_cast<size_t>(saved.experiences_size()));
   EXPECT_EQ(loaded.refused_recognitions(), 0u);
   const proto::ExperienceMap again = loaded.Save();
   EXPECT_GT(again.turned_since_hold_rad(), 1e300) << "the heading gate wide open";
-  EXPECT_EQ(again.bridge().from_id(), map.current_id()) << "a bridge started at the current experience";
+  EXPECT_EQ(again.bridge().from_id(), saved.current_id()) << "a bridge started at the current experience";
   EXPECT_FALSE(again.has_last_scan());
 }
 
 TEST(ExperienceMapRestart, ABrokenRestartStateIsRefusedWhole) {
-  ExperienceMapNodeConfig demo;
-  LoadConfigSection(LoadYamlFile(RSLAM_SOURCE_DIR "/deploy/config/demo.yaml"), "experience_map", demo);
-  const std::vector<Frame> frames = ThreeLaps();
-  ExperienceMap map(demo.map);
-  for (size_t i = 0; i < frames.size() / 2; ++i) Feed(map, frames[i]);
-  const proto::ExperienceMap good = map.Save();
-  ExperienceMap loaded(demo.map);
+  const proto::ExperienceMap good = SavedHalfway();
+  ExperienceMap loaded(DemoConfig());
   loaded.Load(good);
   const std::string before = loaded.Save().SerializeAsString();
   std::vector<proto::ExperienceMap> broken(6, good);
