@@ -9,6 +9,7 @@ namespace rslam {
 void ServiceRuntimeConfig::Validate() const {
   Require(state_save_period_s > 0, "state_save_period_s", "must be positive");
   Require(heartbeat_period_s > 0, "heartbeat_period_s", "must be positive");
+  Require(stop_timeout_s > 0, "stop_timeout_s", "must be positive");
 }
 
 void ServiceStats::RecordProcessing(std::chrono::nanoseconds d) {

@@ -24,6 +24,7 @@ struct ServiceRuntimeConfig {
   std::string state_dir;           // where state files live; empty = no persistence
   double state_save_period_s = 5;  // periodic save of stateful services (also on shutdown)
   double heartbeat_period_s = 1;   // rslam/status period
+  double stop_timeout_s = 5;       // a stop (state save, bus teardown) taking longer ends the process
   bool fresh = false;              // ignore saved state at start
   std::string log_level = "info";
 
@@ -32,6 +33,8 @@ struct ServiceRuntimeConfig {
     v("state_dir", state_dir, "folder for state files; empty = do not persist");
     v("state_save_period_s", state_save_period_s, "seconds between periodic state saves");
     v("heartbeat_period_s", heartbeat_period_s, "seconds between rslam/status heartbeats");
+    v("stop_timeout_s", stop_timeout_s,
+      "seconds a stop (saving the state, leaving the bus) may take before the process exits regardless");
     v("fresh", fresh, "start from empty state even if a state file exists");
     v("log_level", log_level, "trace, debug, info, warn, error or off");
   }

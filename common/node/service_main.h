@@ -3,7 +3,8 @@
 // --robot, --dds, --domain, --set key=value, --state-dir, --fresh, --log-level, --help),
 // loads the YAML config (sections `bus`, `service` and one named after the service), joins
 // the bus, constructs the node, publishes heartbeats, calls the node's periodic hook, and on
-// SIGINT/SIGTERM destroys the node (which saves its state) and exits 0.
+// SIGINT/SIGTERM destroys the node (which saves its state) and exits 0. The whole stop is
+// bounded by service.stop_timeout_s (ExitDeadline).
 //
 // A node is a class with
 //   using Config = ...;                      // VisitFields/Validate struct, section `name`
@@ -18,6 +19,7 @@
 
 #include <csignal>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -83,6 +85,8 @@ int RunService(const std::string& name, const std::string& description, int argc
     return 2;
   }
   try {
+    // Declared first, so destroyed last: it bounds the whole stop, the node's and the bus's.
+    std::optional<ExitDeadline> stop_deadline;
     ServiceContext context(name, bus::Participant::Create(bus_config), runtime);
     Heartbeat heartbeat(context);
     spdlog::info("starting on {} domain {} as robot {}", bus_config.dds, bus_config.domain_id, bus_config.robot_id);
@@ -101,6 +105,7 @@ int RunService(const std::string& name, const std::string& description, int argc
         },
         &tick);
     spdlog::info("stopping ({})", sig == 0 ? "finished" : (sig == SIGINT ? "SIGINT" : "SIGTERM"));
+    stop_deadline.emplace(std::chrono::milliseconds(static_cast<int64_t>(runtime.stop_timeout_s * 1000)), "the stop");
     heartbeat.Publish("stopping");
   } catch (const ConfigError& e) {
     spdlog::error("config error: {}", e.what());

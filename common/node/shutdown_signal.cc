@@ -2,9 +2,11 @@
 
 #include <pthread.h>
 #include <signal.h>
+#include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <ctime>
 
 namespace rslam {
@@ -45,5 +47,24 @@ int WaitForShutdown(std::chrono::milliseconds period, void (*on_tick)(void*), vo
 }
 
 void RequestShutdown() { kill(getpid(), SIGUSR1); }
+
+ExitDeadline::ExitDeadline(std::chrono::milliseconds timeout, std::string what)
+    : thread_([this, timeout, what = std::move(what)] {
+        std::unique_lock lock(mutex_);
+        if (cv_.wait_for(lock, timeout, [this] { return done_; })) return;
+        spdlog::warn("{} did not finish within {} ms: exiting without it", what,
+                     timeout.count());
+        spdlog::default_logger()->flush();
+        std::_Exit(0);
+      }) {}
+
+ExitDeadline::~ExitDeadline() {
+  {
+    std::lock_guard lock(mutex_);
+    done_ = true;
+  }
+  cv_.notify_all();
+  thread_.join();
+}
 
 }  // namespace rslam

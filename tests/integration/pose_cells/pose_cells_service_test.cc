@@ -403,6 +403,22 @@ TEST_F(PoseCellsServiceTest, AFailedSaveIsTriedAgainAtTheNextSave) {
   ASSERT_EQ(service->WaitExit(10s), std::optional<int>(0)) << service->Output();
 }
 
+TEST_F(PoseCellsServiceTest, AStopPastItsTimeoutEndsTheProcess) {
+  // A 1 ms budget runs out during the stop (saving the state and leaving the bus take longer):
+  // the process says so and exits 0 instead of waiting to be killed.
+  auto service = Start({"--set", "service.stop_timeout_s=0.001"});
+  const std::vector<ScriptedFrame> script = testing::ScriptedLoop(5);
+  for (const ScriptedFrame& f : script) {
+    velocity_pub_->Publish(f.velocity);
+    view_pub_->Publish(f.view);
+  }
+  ASSERT_EQ(AwaitActions(5).size(), 5u) << service->Output();
+  service->Signal(SIGTERM);
+  ASSERT_EQ(service->WaitExit(10s), std::optional<int>(0)) << service->Output();
+  EXPECT_NE(service->Output().find("the stop did not finish within 1 ms: exiting without it"), std::string::npos)
+      << service->Output();
+}
+
 TEST_F(PoseCellsServiceTest, CorruptStateFileIsRefusedAtStart) {
   std::ofstream(state_dir_.path() / "pose_cells.pb") << "not a state file";
   const auto [code, output] = testing::RunToExit(
@@ -416,6 +432,13 @@ TEST_F(PoseCellsServiceTest, UnknownConfigKeyExitsTwoNamingTheKey) {
       testing::RunToExit(kBinary, {"--domain", std::to_string(domain_.id()), "--set", "pose_cells.pc_dim_zz=3"});
   EXPECT_EQ(code, 2) << output;
   EXPECT_NE(output.find("pose_cells.pc_dim_zz"), std::string::npos) << output;
+}
+
+TEST_F(PoseCellsServiceTest, ANonPositiveStopTimeoutExitsTwoNamingTheKey) {
+  const auto [code, output] =
+      testing::RunToExit(kBinary, {"--domain", std::to_string(domain_.id()), "--set", "service.stop_timeout_s=0"});
+  EXPECT_EQ(code, 2) << output;
+  EXPECT_NE(output.find("stop_timeout_s"), std::string::npos) << output;
 }
 
 }  // namespace
