@@ -40,7 +40,7 @@ class OdometryReplayTest : public ::testing::Test {
     // From the demo's start: ahead, a quarter turn left, on, a half turn, back.
     sim::RobotMotion motion(world_, sim_.sim.motion, sim::StartPoseOf(sim_, world_));
     const double dt = sim_.sim.motion.time_step_s;
-    frames_.push_back({0, 0, motion.pose()});
+    frames_.push_back({0, 0, motion.pose(), {}, {}});
     for (const sim::MotionCommand& command :
          {sim::MotionCommand::Move(1.0), sim::MotionCommand::Rotate(M_PI / 2), sim::MotionCommand::Move(0.6),
           sim::MotionCommand::Rotate(-M_PI), sim::MotionCommand::Move(0.5)}) {
@@ -48,7 +48,8 @@ class OdometryReplayTest : public ::testing::Test {
       for (bool idle = false; !idle;) {
         const sim::StepResult step = motion.Step(dt);
         const auto seq = static_cast<uint64_t>(frames_.size());
-        frames_.push_back({seq, static_cast<int64_t>(std::llround(static_cast<double>(seq) * dt * 1e9)), step.pose});
+        const auto stamp_ns = static_cast<int64_t>(std::llround(static_cast<double>(seq) * dt * 1e9));
+        frames_.push_back({seq, stamp_ns, step.pose, {}, {}});
         idle = step.idle;
       }
     }
