@@ -52,8 +52,7 @@ ExitDeadline::ExitDeadline(std::chrono::milliseconds timeout, std::string what)
     : thread_([this, timeout, what = std::move(what)] {
         std::unique_lock lock(mutex_);
         if (cv_.wait_for(lock, timeout, [this] { return done_; })) return;
-        spdlog::warn("{} did not finish within {} ms: exiting without it", what,
-                     timeout.count());
+        spdlog::warn("{} did not finish within {} ms: exiting without it", what, timeout.count());
         spdlog::default_logger()->flush();
         std::_Exit(0);
       }) {}

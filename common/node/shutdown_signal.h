@@ -22,9 +22,9 @@ void RequestShutdown();
 // Ends the process with exit code 0 if it is still alive `timeout` after construction, unless
 // destroyed first. main arms one when a stop begins: Fast DDS 2.9 can deadlock deleting its
 // entities while the peers leave at the same moment (a timer's removal waits for the event
-// thread, which waits for a lock the removal holds; eProsima/Fast-DDS#6193 and #6502). The state
-// is saved first and written atomically, so the process logs a warning and exits rather than
-// waiting for its launcher to kill it.
+// thread, which waits for a lock the removal holds; eProsima/Fast-DDS#6193 and #6502). The node
+// saves its state first and state files are renamed into place whole, so the process logs a
+// warning and exits rather than waiting for its launcher to kill it.
 class ExitDeadline {
  public:
   ExitDeadline(std::chrono::milliseconds timeout, std::string what);
