@@ -343,7 +343,8 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
         break;
       }
       pose_cells_current_.reset();
-      driven_since_recognition_m_ = 0.0;
+      const uint32_t local_ids = static_cast<uint32_t>(config_.exp_recognition_jump_local_ids);
+      if ((to > current_ ? to - current_ : current_ - to) > local_ids) driven_since_recognition_m_ = 0.0;
       bool changed = false;
       if (link_kind || config_.exp_average_repeated_links) {
         if (const int fwd = FindLink(current_, to); fwd >= 0) {

@@ -75,8 +75,12 @@ struct ExperienceMapConfig {
   // exp_recognition_max_link_m (0: any): a link that long joins two places, not one seen again
   // (the map measures such a link within 0.03-0.04 m of the truth in nine of ten; its two wrong
   // ones in 67 replayed runs were 0.81 and 1.04 m long, tools/demo/MEASUREMENTS.md session 48).
+  // A recognition of an experience within exp_recognition_jump_local_ids ids of the current one
+  // (the stretch the robot is on, seen again a step back or ahead) says nothing of the drift, so
+  // it does not restart the distance the jump gate grows with (0: every recognition taken does).
   double exp_recognition_max_jump_m = 0.0;
   double exp_recognition_jump_per_m = 0.0;
+  int exp_recognition_jump_local_ids = 0;
   double exp_recognition_max_turn_rad = 0.0;
   double exp_recognition_max_link_m = 0.0;
   // The robot's heading held to the building's walls (ExperienceMap::HoldHeading): most walls run
@@ -180,6 +184,8 @@ struct ExperienceMapConfig {
       "> 0: a recognition that would move the robot farther than this from where the map has it is refused (m)");
     v("exp_recognition_jump_per_m", exp_recognition_jump_per_m,
       "... plus this for each metre driven since the last recognition taken");
+    v("exp_recognition_jump_local_ids", exp_recognition_jump_local_ids,
+      "> 0: a recognition within this many ids of the current experience does not restart that distance");
     v("exp_recognition_max_turn_rad", exp_recognition_max_turn_rad,
       "> 0: a recognition that would turn the robot's facing by more than this is refused (rad)");
     v("exp_recognition_max_link_m", exp_recognition_max_link_m,
@@ -249,6 +255,7 @@ struct ExperienceMapConfig {
             "exp_recognition_max_jump_m", "must be >= 0");
     Require(std::isfinite(exp_recognition_jump_per_m) && exp_recognition_jump_per_m >= 0,
             "exp_recognition_jump_per_m", "must be >= 0");
+    Require(exp_recognition_jump_local_ids >= 0, "exp_recognition_jump_local_ids", "must be >= 0");
     Require(std::isfinite(exp_recognition_max_turn_rad) && exp_recognition_max_turn_rad >= 0 &&
                 exp_recognition_max_turn_rad <= std::numbers::pi,
             "exp_recognition_max_turn_rad", "must be in [0, pi]");

@@ -830,6 +830,51 @@ TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
                      {"exp_recognition_jump_per_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_per_m = NAN; }}});
 }
 
+// A recognition of the stretch the robot is on (a step back along it) says nothing of how far the
+// map has drifted, so with exp_recognition_jump_local_ids it does not restart the distance the
+// jump gate allows for; one of a place farther back in the map still does.
+TEST(ExperienceMap, ARecognitionOfTheStretchTheRobotIsOnDoesNotRestartTheJumpGate) {
+  ExperienceMapConfig config = NoCorrection();  // the experiences stay where they were laid
+  config.exp_initial_em_deg = 0;
+  config.exp_recognition_max_jump_m = 1.0;
+  config.exp_recognition_jump_per_m = 0.6;
+  ExperienceMapConfig local = config;
+  local.exp_recognition_jump_local_ids = 2;
+  ExperienceMap every(config), stretch(local);
+  for (ExperienceMap* map : {&every, &stretch}) {
+    map->Apply(Create(0, kNoExperience));
+    for (uint32_t id = 1; id <= 4; ++id) {
+      map->Integrate(1.0, 0.0, 1.0);
+      map->Apply(Create(id, id - 1));
+    }
+    // At (4, 0), 4 m driven: 3.4 m allowed. Experience 3, a step back: taken by both.
+    map->Apply(LinkTo(Kind::kSet, 4, 3));
+    EXPECT_EQ(map->refused_recognitions(), 0u);
+    EXPECT_EQ(map->current_id(), 3u);
+    // Experience 0, 3 m behind.
+    map->Apply(LinkTo(Kind::kSet, 3, 0));
+  }
+  // Restarted at experience 3 (1 m allowed): refused.
+  EXPECT_EQ(every.refused_recognitions(), 1u);
+  ExpectRefusal(every, RecognitionRefusal::Gate::kJump, 3.0, 1.0, "exp_recognition_max_jump_m");
+  EXPECT_EQ(every.current_id(), 3u);
+  // Not restarted there (3.4 m allowed): taken, and that restarts it.
+  EXPECT_EQ(stretch.refused_recognitions(), 0u);
+  EXPECT_EQ(stretch.current_id(), 0u);
+  stretch.Apply(LinkTo(Kind::kSet, 0, 4));  // 4 m ahead, 1 m allowed
+  EXPECT_EQ(stretch.refused_recognitions(), 1u);
+  ExpectRefusal(stretch, RecognitionRefusal::Gate::kJump, 4.0, 1.0, "exp_recognition_max_jump_m");
+
+  // The distance so far survives a save and a load.
+  ExperienceMap loaded(local);
+  loaded.Load(stretch.Save());
+  loaded.Apply(LinkTo(Kind::kSet, 0, 4));
+  ExpectRefusal(loaded, RecognitionRefusal::Gate::kJump, 4.0, 1.0, "exp_recognition_max_jump_m");
+
+  ExpectKeysRefused(local, {{"exp_recognition_jump_local_ids",
+                             [](ExperienceMapConfig& c) { c.exp_recognition_jump_local_ids = -1; }}});
+}
+
 TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
   ExperienceMapConfig config = NoCorrection();  // the experiences stay where they were laid
   config.exp_initial_em_deg = 0;
