@@ -112,7 +112,8 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     accum_facing_ = WrapAngle(accum_facing_ - mean);
     ++heading_recaptures_;
   } else {
-    accum_facing_ = WrapAngle(accum_facing_ - config_.exp_manhattan_gain * offset);
+    const double taper = config_.exp_manhattan_taper ? Taper(offset, config_.exp_manhattan_max_offset_rad) : 1.0;
+    accum_facing_ = WrapAngle(accum_facing_ - config_.exp_manhattan_gain * taper * offset);
   }
   turned_since_hold_rad_ = 0.0;
   offsets_outside_gate_.clear();
@@ -501,7 +502,8 @@ PoseGraphResult ExperienceMap::OptimiseGraph(int iterations, double stop_below) 
       experiences_, links_, scan_links_, sigmas,
       iterations, stop_below,
       manhattan_axes_ && config_.exp_manhattan_sigma_rad > 0
-          ? std::optional<ManhattanAxes>({*manhattan_axes_, config_.exp_manhattan_sigma_rad, config_.exp_manhattan_max_offset_rad})
+          ? std::optional<ManhattanAxes>({*manhattan_axes_, config_.exp_manhattan_sigma_rad, config_.exp_manhattan_max_offset_rad,
+                                          config_.exp_manhattan_taper})
           : std::nullopt);
   last_correction_ = result.largest_change;
   graph_pending_ = false;

@@ -101,6 +101,10 @@ struct ExperienceMapConfig {
   double exp_manhattan_offset_per_rad_turned = 0.0;
   double exp_manhattan_max_offset_rad = 0.25;
   double exp_manhattan_gain = 0.2;
+  // The pull of a wall, on the robot and in the least squares, weighed down as it nears the widest
+  // gate, by (1 - (offset / exp_manhattan_max_offset_rad)^2)^2: a wall just inside it is more
+  // likely one off the axes than the heading's drift.
+  bool exp_manhattan_taper = false;
   // A heading that drifted past exp_manhattan_max_offset_rad, taken back when this many wall
   // directions in a row agree on the drift (ExperienceMap::HoldHeading has the rule). 0 = off.
   int exp_manhattan_recapture_frames = 0;
@@ -199,6 +203,7 @@ struct ExperienceMapConfig {
     v("exp_manhattan_max_offset_rad", exp_manhattan_max_offset_rad,
       "... up to this; the least-squares correction's gate for the experiences' walls (rad)");
     v("exp_manhattan_gain", exp_manhattan_gain, "share of a wall direction's offset from its axis taken out per frame");
+    v("exp_manhattan_taper", exp_manhattan_taper, "weigh a wall's pull down as its offset nears exp_manhattan_max_offset_rad");
     v("exp_manhattan_recapture_frames", exp_manhattan_recapture_frames,
       "wall directions past the gate that, agreeing, are taken for the heading's drift and taken out "
       "at once (0 = off)");

@@ -118,8 +118,9 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
         const double error =
             std::remainder(experiences[e].th_rad + *experiences[e].wall_rad - manhattan->axes_rad, std::numbers::pi / 2);
         if (std::abs(error) > manhattan->max_offset_rad) continue;
-        gradient[index[e] + 2] += weight * error;
-        triplets.emplace_back(index[e] + 2, index[e] + 2, weight);
+        const double w = manhattan->taper ? weight * Taper(error, manhattan->max_offset_rad) : weight;
+        gradient[index[e] + 2] += w * error;
+        triplets.emplace_back(index[e] + 2, index[e] + 2, w);
       }
     }
     Eigen::SparseMatrix<double> hessian(size, size);

@@ -1,6 +1,7 @@
 // Pins the experience map against paper 000 eqs. 1-3, the budgeted correction's fixed point,
 // paths over links, persistence, merging and bad input.
 #include "services/experience_map/experience_map.h"
+#include "services/experience_map/pose_graph.h"
 
 #include <gtest/gtest.h>
 
@@ -1093,8 +1094,9 @@ TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurn
 // frame) while the odometry turns it 0.01 rad per experience: the least-squares correction, with
 // the experiences' walls in it, takes most of that turn back out of the map. The robot's own hold
 // is left out (a gain of 1e-9) to see the experiences' terms alone.
-std::unique_ptr<ExperienceMap> DriftingAlongWalls(double sigma_rad, double wall_rad) {
+std::unique_ptr<ExperienceMap> DriftingAlongWalls(double sigma_rad, double wall_rad, bool taper = false) {
   ExperienceMapConfig config = LeastSquares(1);
+  config.exp_manhattan_taper = taper;
   config.exp_initial_em_deg = 0;
   config.exp_manhattan = true;
   config.exp_manhattan_reference_frames = 5;
@@ -1157,6 +1159,34 @@ TEST(ExperienceMap, LeastSquaresHoldsTheExperiencesToTheWalls) {
   } catch (const ConfigError& e) {
     EXPECT_EQ(e.key(), "exp_manhattan_sigma_rad");
   }
+}
+
+// exp_manhattan_taper: a wall's pull falls as its offset nears the widest gate, on the robot and in
+// the least squares; one just inside it (a funnel's wall 0.24 rad off) barely turns anything.
+TEST(ExperienceMap, AWallNearTheWidestGatePullsLessWithTheTaper) {
+  EXPECT_DOUBLE_EQ(Taper(0.0, 0.25), 1.0);
+  EXPECT_DOUBLE_EQ(Taper(-0.125, 0.25), 0.5625);
+  EXPECT_DOUBLE_EQ(Taper(0.25, 0.25), 0.0);
+  EXPECT_DOUBLE_EQ(Taper(-0.3, 0.25), 0.0);
+
+  for (const double wall : {0.1, 0.24}) {
+    ExperienceMapConfig config = HeldToWalls();  // gain 0.2, widest gate 0.25
+    ExperienceMap plain(config);
+    config.exp_manhattan_taper = true;
+    ExperienceMap tapered(config);
+    for (ExperienceMap* map : {&plain, &tapered}) {
+      for (int i = 0; i < 5; ++i) map->HoldHeading(0.0);  // the axes at 0
+      map->HoldHeading(wall);
+    }
+    EXPECT_NEAR(plain.RobotPose().theta, -0.2 * wall, 1e-12);
+    EXPECT_NEAR(tapered.RobotPose().theta, -0.2 * Taper(wall, 0.25) * wall, 1e-12);
+  }
+
+  // In the least squares the drift's walls (0-0.2 rad off as the map has them) still hold the
+  // map: its last experience faces 0.2 rad without the terms, -0.041 with them, 0.007 tapered.
+  EXPECT_NEAR(DriftingAlongWalls(0.0, 0.0)->experiences().back().th_rad, 0.2, 1e-6);
+  EXPECT_NEAR(DriftingAlongWalls(0.05, 0.0)->experiences().back().th_rad, -0.041, 0.001);
+  EXPECT_NEAR(DriftingAlongWalls(0.05, 0.0, true)->experiences().back().th_rad, 0.007, 0.001);
 }
 
 proto::ExperienceMap SmallGraph() {
