@@ -32,21 +32,22 @@ struct PoseGraphSigmas {
   double scan_m = 1, scan_rad = 1;  // scan link (the walls of two stretches registered)
 };
 
-// The building's axes (exp_manhattan): an experience with a wall direction w (relative to its
-// facing, modulo pi/2) adds the error r = theta + w - axes_rad (modulo pi/2) weighted by
-// 1/sigma_rad^2, while |r| <= max_offset_rad (farther off, the wall is taken for another one and
-// the term is left out for that step).
-// (1 - (r / limit)^2)^2 within the limit, 0 past it: 1 at r = 0, 0.56 at half the limit.
+// (1 - (r / limit)^2)^2 within the limit, 0 past it: 1 at r = 0, 0.56 at half the limit. A wall's
+// pull with exp_manhattan_taper, on the robot and here.
 inline double Taper(double r, double limit) {
   const double u = r / limit;
   return std::abs(u) >= 1 ? 0.0 : (1 - u * u) * (1 - u * u);
 }
 
+// The building's axes (exp_manhattan): an experience with a wall direction w (relative to its
+// facing, modulo pi/2) adds the error r = theta + w - axes_rad (modulo pi/2) weighted by
+// 1/sigma_rad^2, times Taper(r, max_offset_rad) with `taper`, while |r| <= max_offset_rad (farther
+// off, the wall is taken for another one and the term is left out for that step).
 struct ManhattanAxes {
   double axes_rad;
   double sigma_rad;
   double max_offset_rad;
-  bool taper = false;  // weighed by (1 - (r / max_offset_rad)^2)^2: a wall near the gate barely pulls
+  bool taper = false;
 };
 
 // Runs up to `iterations` Gauss-Newton steps over all experiences, links and scan links (the same
