@@ -112,6 +112,7 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     accum_facing_ = WrapAngle(accum_facing_ - mean);
     ++heading_recaptures_;
   } else {
+    // Tapered or not, a wall inside the gate counts as held: the gate narrows again below.
     const double taper = config_.exp_manhattan_taper ? Taper(offset, config_.exp_manhattan_max_offset_rad) : 1.0;
     accum_facing_ = WrapAngle(accum_facing_ - config_.exp_manhattan_gain * taper * offset);
   }
