@@ -5,6 +5,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -68,6 +69,7 @@ struct RecordArgs {
   int zstd_level = 1;
   double duration_s = 0;
   double queue_mb = 1024;
+  double stop_timeout_s = 5;
   BusFlags bus;
 };
 
@@ -122,6 +124,10 @@ void RegisterRecord(CLI::App& rslam) {
   cmd->add_option("--queue-mb", args->queue_mb, "memory for messages waiting to be written; beyond it they are dropped")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--stop-timeout", args->stop_timeout_s,
+                  "once the file is finished, exit anyway if leaving the bus takes longer than S seconds")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   AddBusFlags(cmd, args->bus);
   cmd->callback([args] {
     const bus::BusConfig config = MakeBusConfig(args->bus, "rslam-record");
@@ -137,6 +143,9 @@ void RegisterRecord(CLI::App& rslam) {
     options.queue_bytes = static_cast<std::size_t>(args->queue_mb * 1e6);
 
     BlockShutdownSignals();  // before DDS starts its threads
+    // Declared first, so destroyed last: armed once the file is finished, it bounds the bus
+    // teardown after it (the services' stop_timeout_s, for the same Fast DDS hang).
+    std::optional<ExitDeadline> teardown_deadline;
     std::unique_ptr<bus::Participant> participant;
     std::unique_ptr<Recorder> recorder;
     try {
@@ -174,6 +183,8 @@ void RegisterRecord(CLI::App& rslam) {
       std::cerr << "[record] warning: " << st.dropped << " messages dropped: the disk did not keep up (raise --queue-mb)"
                 << std::endl;
     if (!error.empty()) Fail("record", "writing failed: " + error);
+    teardown_deadline.emplace(std::chrono::milliseconds(std::llround(args->stop_timeout_s * 1000)),
+                              "leaving the bus");
   });
 }
 

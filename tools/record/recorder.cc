@@ -177,7 +177,8 @@ void Recorder::Stop() {
   stop_writer_ = true;
   queue_.Wake();
   if (writer_thread_.joinable()) writer_thread_.join();
-  subscriptions_.clear();  // readers go before the file is closed: nothing more can arrive
+  // The readers stay until the recorder goes: nothing takes from them now, and deleting a DDS
+  // reader can hang (Fast DDS 2.9.1, see ExitDeadline), which must not keep the file unfinished.
   {
     std::lock_guard lock(error_mutex_);
     if (error_) std::rethrow_exception(error_);

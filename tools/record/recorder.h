@@ -61,13 +61,13 @@ class Recorder {
   // for bad options (regex, compression, no topic selected), std::runtime_error when the file
   // cannot be created, bus::BusError when DDS refuses a reader.
   Recorder(bus::Participant& participant, const RecorderOptions& options);
-  // Stops (see Stop) if still running.
+  // Stops (see Stop) if still running, then deletes the readers.
   ~Recorder();
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
 
-  // Takes what DDS already delivered, writes everything queued and finishes the file(s).
-  // Rethrows a write error of the writer thread. Idempotent.
+  // Takes what DDS already delivered, writes everything queued and finishes the file(s); the
+  // readers are left to the destructor. Rethrows a write error of the writer thread. Idempotent.
   void Stop();
 
   // The topics selected by the options, in topic-table order.
