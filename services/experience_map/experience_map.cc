@@ -208,7 +208,7 @@ std::string ToString(const RecognitionRefusal& refusal) {
     case RecognitionRefusal::Gate::kJump:
       std::snprintf(line, sizeof(line),
                     "it would move the robot %.2f m from where the map has it "
-                    "(exp_recognition_max_jump_m + _jump_per_m: %.2f m here)",
+                    "(exp_recognition_max_jump_m + _jump_per_m, at most _jump_cap_m: %.2f m here)",
                     refusal.value, refusal.limit);
       break;
     case RecognitionRefusal::Gate::kTurn:
@@ -240,8 +240,9 @@ std::optional<RecognitionRefusal> ExperienceMap::RefusalOf(const ExperienceActio
   if (config_.exp_recognition_max_jump_m <= 0) return std::nullopt;
   const Pose2D placed = Compose(e.pose(), {a.offset_x_m, a.offset_y_m, 0.0});  // as SetCurrent puts it
   const double jump = std::hypot(placed.x - robot.x, placed.y - robot.y);
-  const double allowed =
+  double allowed =
       config_.exp_recognition_max_jump_m + config_.exp_recognition_jump_per_m * driven_since_recognition_m_;
+  if (config_.exp_recognition_jump_cap_m > 0) allowed = std::min(allowed, config_.exp_recognition_jump_cap_m);
   if (jump > allowed) return RecognitionRefusal{Gate::kJump, jump, allowed};
   return std::nullopt;
 }

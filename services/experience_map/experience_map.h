@@ -101,7 +101,7 @@ struct RecognitionRefusal {
   double limit = 0.0;
 };
 // One line for the log, naming the gate's key: "it would move the robot 5.10 m from where the map
-// has it (exp_recognition_max_jump_m + _jump_per_m: 4.30 m here)".
+// has it (exp_recognition_max_jump_m + _jump_per_m, at most _jump_cap_m: 4.30 m here)".
 std::string ToString(const RecognitionRefusal& refusal);
 
 // A pair of experiences known to be the same place when merging two maps.

@@ -78,8 +78,12 @@ struct ExperienceMapConfig {
   // A recognition of an experience within exp_recognition_jump_local_ids ids of the current one
   // (the stretch the robot is on, seen again a step back or ahead) says nothing of the drift, so
   // it does not restart the distance the jump gate grows with (0: every recognition taken does).
+  // The allowance grows no further than exp_recognition_jump_cap_m (0: without bound): a run whose
+  // recognitions are all of the stretch it is on drives on and on without restarting it, and then
+  // a place 12 m away that looks alike was let through (tools/demo/MEASUREMENTS.md, session 54).
   double exp_recognition_max_jump_m = 0.0;
   double exp_recognition_jump_per_m = 0.0;
+  double exp_recognition_jump_cap_m = 0.0;
   int exp_recognition_jump_local_ids = 0;
   double exp_recognition_max_turn_rad = 0.0;
   double exp_recognition_max_link_m = 0.0;
@@ -188,6 +192,8 @@ struct ExperienceMapConfig {
       "> 0: a recognition that would move the robot farther than this from where the map has it is refused (m)");
     v("exp_recognition_jump_per_m", exp_recognition_jump_per_m,
       "... plus this for each metre driven since the last recognition taken");
+    v("exp_recognition_jump_cap_m", exp_recognition_jump_cap_m,
+      "> 0: ... but never more than this in all (m; at least exp_recognition_max_jump_m)");
     v("exp_recognition_jump_local_ids", exp_recognition_jump_local_ids,
       "> 0: a recognition within this many ids of the current experience does not restart that distance");
     v("exp_recognition_max_turn_rad", exp_recognition_max_turn_rad,
@@ -260,6 +266,9 @@ struct ExperienceMapConfig {
             "exp_recognition_max_jump_m", "must be >= 0");
     Require(std::isfinite(exp_recognition_jump_per_m) && exp_recognition_jump_per_m >= 0,
             "exp_recognition_jump_per_m", "must be >= 0");
+    Require(std::isfinite(exp_recognition_jump_cap_m) &&
+                (exp_recognition_jump_cap_m == 0 || exp_recognition_jump_cap_m >= exp_recognition_max_jump_m),
+            "exp_recognition_jump_cap_m", "must be 0 (no cap) or >= exp_recognition_max_jump_m");
     Require(exp_recognition_jump_local_ids >= 0, "exp_recognition_jump_local_ids", "must be >= 0");
     Require(std::isfinite(exp_recognition_max_turn_rad) && exp_recognition_max_turn_rad >= 0 &&
                 exp_recognition_max_turn_rad <= std::numbers::pi,

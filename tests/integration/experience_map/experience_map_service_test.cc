@@ -233,7 +233,7 @@ TEST_F(ExperienceMapServiceTest, ARecognitionFarFromTheMapsRobotIsRefusedAndTheN
   EXPECT_EQ(status->messages_rejected, 0u) << service->Output();
   // The log names the gate and both figures: experience 0 (laid at 0.1 m) 6 m behind, 1 m allowed.
   EXPECT_NE(service->Output().find("recognition of experience 0 refused: it would move the robot 6.00 m from where "
-                                   "the map has it (exp_recognition_max_jump_m + _jump_per_m: 1.00 m here)"),
+                                   "the map has it (exp_recognition_max_jump_m + _jump_per_m, at most _jump_cap_m: 1.00 m here)"),
             std::string::npos)
       << service->Output();
 }

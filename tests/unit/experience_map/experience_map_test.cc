@@ -832,6 +832,39 @@ TEST(ExperienceMap, ARecognitionFarFromWhereTheMapHasTheRobotIsRefused) {
                      {"exp_recognition_jump_per_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_per_m = NAN; }}});
 }
 
+// The jump gate's allowance grows with the distance driven only up to exp_recognition_jump_cap_m:
+// 11 m driven would allow 7.5 m, the cap 4 m, so a place 6 m behind is refused with the cap and
+// taken without it.
+TEST(ExperienceMap, TheJumpGatesAllowanceStopsGrowingAtItsCap) {
+  ExperienceMapConfig uncapped = NoCorrection();
+  uncapped.exp_initial_em_deg = 0;
+  uncapped.exp_recognition_max_jump_m = 2.0;
+  uncapped.exp_recognition_jump_per_m = 0.5;
+  ExperienceMapConfig capped = uncapped;
+  capped.exp_recognition_jump_cap_m = 4.0;
+  for (const ExperienceMapConfig* config : {&uncapped, &capped}) {
+    ExperienceMap map(*config);
+    map.Apply(Create(0, kNoExperience));
+    map.Integrate(5.0, 0.0, 1.0);
+    map.Apply(Create(1, 0));
+    map.Integrate(5.0, 0.0, 1.0);
+    map.Apply(Create(2, 1));
+    map.Integrate(1.0, 0.0, 1.0);  // the robot at (11, 0), 11 m driven since the start
+    map.Apply(LinkTo(Kind::kLink, 2, 1));  // experience 1, 6 m behind
+    if (config == &capped) {
+      ExpectRefusal(map, RecognitionRefusal::Gate::kJump, 6.0, 4.0, "_jump_cap_m");
+      EXPECT_EQ(map.current_id(), 2u);
+    } else {
+      EXPECT_FALSE(map.last_refusal().has_value());
+      EXPECT_EQ(map.current_id(), 1u);
+    }
+  }
+  ExpectKeysRefused(capped,
+                    {{"exp_recognition_jump_cap_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_cap_m = 1.0; }},
+                     {"exp_recognition_jump_cap_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_cap_m = NAN; }},
+                     {"exp_recognition_jump_cap_m", [](ExperienceMapConfig& c) { c.exp_recognition_jump_cap_m = -1; }}});
+}
+
 // A recognition of the stretch the robot is on (a step back along it) says nothing of how far the
 // map has drifted, so with exp_recognition_jump_local_ids it does not restart the distance the
 // jump gate allows for; one of a place farther back in the map still does.
