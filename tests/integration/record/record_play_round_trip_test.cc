@@ -370,9 +370,11 @@ TEST(RecordProcess, SigtermFinishesTheFileCleanly) {
   EXPECT_EQ(nlohmann::json::parse(info.output)["message_count"], 0);
 }
 
-// The file is finished before the recorder leaves the bus, and only leaving the bus is cut short
-// by --stop-timeout (the Fast DDS teardown hang the services' stop_timeout_s bounds): with a 1-ms
-// budget the teardown overruns, the process says so and exits 0, and the file holds every message.
+// --stop-timeout bounds only leaving the bus, armed once the file is finished (the Fast DDS
+// teardown hang the services' stop_timeout_s bounds): with a 1-ms budget the teardown overruns,
+// the process says so and exits 0, and the file holds every message. (Finishing the file takes
+// some 50 ms, so a deadline armed before it would cut the file; that the readers are deleted
+// after it is not something this test can see.)
 // Cyclone, subscribed to every topic: deleting its readers took over 1 ms in 30 of 30 tries here
 // (one reader: 13 of 15), while Fast DDS deletes them in under 1 ms and spends its time at exit.
 TEST(RecordProcess, ATeardownPastItsStopTimeoutLeavesTheFileWhole) {
