@@ -68,7 +68,7 @@ bool AnchoredProfileMap::IsNewView(uint64_t experience_id, const Pose2D& offset,
 
 size_t AnchoredProfileMap::Rebuild(const ExperiencePoseLookup& lookup) {
   RebuildPlan plan = PlanRebuild(lookup);
-  Adopt(Replay(plan), plan);
+  Adopt(*Replay(plan), plan);
   return plan.moved;
 }
 
@@ -87,9 +87,10 @@ AnchoredProfileMap::RebuildPlan AnchoredProfileMap::PlanRebuild(const Experience
   return plan;
 }
 
-OccupancyGrid AnchoredProfileMap::Replay(RebuildPlan& plan) {
+std::optional<OccupancyGrid> AnchoredProfileMap::Replay(RebuildPlan& plan, std::stop_token stop) {
   OccupancyGrid grid(plan.grid, plan.sensor);
   for (Placement& p : plan.placements) {
+    if (stop.stop_requested()) return std::nullopt;
     Align(grid, *p.profile, p.pose, plan.alignment, p.alignment);
     grid.InsertProfile(*p.profile, Drawn(p.pose, p.alignment));
   }

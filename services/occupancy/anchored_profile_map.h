@@ -17,6 +17,7 @@
 #include <deque>
 #include <functional>
 #include <optional>
+#include <stop_token>
 #include <vector>
 
 #include "services/occupancy/occupancy_grid.h"
@@ -85,8 +86,9 @@ class AnchoredProfileMap {
   RebuildPlan PlanRebuild(const ExperiencePoseLookup& lookup);
   // The grid of the planned profiles alone, aligning them as it goes (their corrections are kept
   // in the plan). Touches only the plan and reads the profiles it points at, so it may run on
-  // another thread while this map takes new profiles.
-  static OccupancyGrid Replay(RebuildPlan& plan);
+  // another thread while this map takes new profiles. nullopt when `stop` is requested before it
+  // is done (a newer plan makes this one useless); the plan is then not to be adopted.
+  static std::optional<OccupancyGrid> Replay(RebuildPlan& plan, std::stop_token stop = {});
   // Takes `grid` (Replay of `plan`) as the map's grid and the plan's corrections, with the profiles
   // kept since the plan added.
   void Adopt(OccupancyGrid grid, const RebuildPlan& plan);

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <optional>
 #include <stdexcept>
+#include <stop_token>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -90,19 +91,27 @@ class OccupancyNode::Mapper {
 
   ~Mapper() { StopRebuilds(); }
 
-  // Stops processing, finishes a rebuild under way and the newest correction still waiting for
-  // one (rebuilds are spaced), then saves the state and exports the grid.
+  // Stops processing and saves every kept profile before anything slow, then brings the grid onto
+  // the newest map: a rebuild of an older map still under way is dropped for it, so the stop
+  // replays once (a long demo run's rebuild took 3-6 s, and finishing one and then the newest ran
+  // past the 5-s stop deadline). Then saves the anchors the rebuild moved and exports the grid.
+  // If the deadline ends the stop during the rebuild, the state file still holds every profile.
   void Stop() {
+    const auto start = std::chrono::steady_clock::now();
     {
       std::lock_guard lock(mutex_);
       stopped_ = true;
-      if (RebuildDue()) ApplyPendingCorrection();
+      if (planned_rebuild_ && pending_correction_) planned_rebuild_->stop.request_stop();
+      ApplyPendingCorrection();  // when a rebuild is under way, the loop plans this after it
     }
+    SaveState();
     StopRebuilds();
     if (config_.profile_alignment.window_m > 0)
       spdlog::info("{} of {} kept profiles were aligned with the grid", map_.AlignedProfiles(), map_.profiles().size());
     SaveState();
     ExportMaps();
+    spdlog::info("stopped: {} kept profiles saved, the grid on map version {}, in {:.2f} s", map_.profiles().size(),
+                 grid_map_version_, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
 
   void Tick() {
@@ -173,7 +182,7 @@ class OccupancyNode::Mapper {
     const PendingCorrection correction = std::move(*pending_correction_);
     pending_correction_.reset();
     rebuilt_version_ = correction.map_version;
-    if (!AnchorsMoved(correction.poses)) {
+    if (!grid_behind_anchors_ && !AnchorsMoved(correction.poses)) {
       grid_map_version_ = std::max(grid_map_version_, correction.map_version);
       return;
     }
@@ -181,7 +190,8 @@ class OccupancyNode::Mapper {
       if (auto it = correction.poses.find(id); it != correction.poses.end()) return it->second;
       return std::nullopt;
     };
-    planned_rebuild_ = PlannedRebuild{map_.PlanRebuild(lookup), correction.map_version};
+    planned_rebuild_.emplace(map_.PlanRebuild(lookup), correction.map_version);
+    grid_behind_anchors_ = true;  // until the plan's grid is adopted
     frames_since_rebuild_ = 0;
     if (!rebuild_thread_.joinable()) rebuild_thread_ = std::thread([this] { RebuildLoop(); });
     rebuild_wake_.notify_one();
@@ -196,12 +206,20 @@ class OccupancyNode::Mapper {
       PlannedRebuild& job = *planned_rebuild_;
       lock.unlock();
       const auto start = std::chrono::steady_clock::now();
-      OccupancyGrid grid = AnchoredProfileMap::Replay(job.plan);
+      std::optional<OccupancyGrid> grid = AnchoredProfileMap::Replay(job.plan, job.stop.get_token());
       const auto end = std::chrono::steady_clock::now();
       lock.lock();
+      if (!grid) {  // stopped for a newer map (Stop): the anchors the plan moved are not in the grid
+        spdlog::info("map version {}: rebuild dropped for map version {}", job.map_version,
+                     pending_correction_ ? pending_correction_->map_version : 0);
+        planned_rebuild_.reset();
+        ApplyPendingCorrection();
+        continue;
+      }
       rebuild_not_before_ = end + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                       (end - start) * (1.0 / config_.rebuild_max_busy_share - 1.0));
-      map_.Adopt(std::move(grid), job.plan);
+      map_.Adopt(std::move(*grid), job.plan);
+      grid_behind_anchors_ = false;
       const uint64_t version = job.map_version;
       grid_map_version_ = std::max(grid_map_version_, version);
       dirty_ = true;
@@ -344,10 +362,13 @@ class OccupancyNode::Mapper {
   };
   std::optional<PendingCorrection> pending_correction_;
   struct PlannedRebuild {
+    PlannedRebuild(AnchoredProfileMap::RebuildPlan p, uint64_t version) : plan(std::move(p)), map_version(version) {}
     AnchoredProfileMap::RebuildPlan plan;
     uint64_t map_version = 0;
+    std::stop_source stop;  // requested when a newer map waits at the stop
   };
   std::optional<PlannedRebuild> planned_rebuild_;  // set from the plan until the rebuild thread adopts it
+  bool grid_behind_anchors_ = false;  // a plan moved the anchors and its grid is not adopted (yet, or dropped)
   bool stop_rebuilds_ = false;
   std::condition_variable rebuild_wake_;
   std::thread rebuild_thread_;  // started by the first rebuild, joined by StopRebuilds

@@ -157,8 +157,8 @@ void BM_AnchoredProfileMapReplay(benchmark::State& state) {
   AnchoredProfileMap map = DemoSizedMap(static_cast<int>(state.range(0)), state.range(1));
   AnchoredProfileMap::RebuildPlan plan = map.PlanRebuild(Shifted);
   for (auto _ : state) {
-    OccupancyGrid grid = AnchoredProfileMap::Replay(plan);
-    benchmark::DoNotOptimize(grid.values().data());
+    std::optional<OccupancyGrid> grid = AnchoredProfileMap::Replay(plan);
+    benchmark::DoNotOptimize(grid->values().data());
   }
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
@@ -170,7 +170,7 @@ BENCHMARK(BM_AnchoredProfileMapReplay)
 void BM_AnchoredProfileMapPlanAndAdopt(benchmark::State& state) {
   AnchoredProfileMap map = DemoSizedMap(static_cast<int>(state.range(0)), state.range(1));
   AnchoredProfileMap::RebuildPlan first = map.PlanRebuild(Shifted);
-  const OccupancyGrid replayed = AnchoredProfileMap::Replay(first);
+  const OccupancyGrid replayed = *AnchoredProfileMap::Replay(first);
   for (auto _ : state) {
     const AnchoredProfileMap::RebuildPlan plan = map.PlanRebuild(Shifted);
     OccupancyGrid grid = replayed;  // the copy stands in for the replay (not timed apart)

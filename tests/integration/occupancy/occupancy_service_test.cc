@@ -329,6 +329,67 @@ TEST_F(OccupancyServiceTest, TheCorrectionStillWaitingAtSigtermIsInTheGridItPubl
   }
 }
 
+// A service whose rebuilds take seconds: a 2-m, 1-rad alignment search for each of `misplaced`
+// frames the map put 0.2 m short of where ten frames saw the wall (no periodic save). Waits until
+// the service has taken all its frames.
+class SlowRebuildTest : public OccupancyServiceTest {
+ protected:
+  static constexpr int kTrueFrames = 10, kMisplacedFrames = 20;
+  static constexpr int kProfiles = kTrueFrames + kMisplacedFrames;
+
+  std::unique_ptr<ChildProcess> StartWithFrames(const std::vector<std::string>& extra) {
+    std::vector<std::string> args{"--set", "occupancy.profile_alignment.window_m=2", "--set",
+                                  "occupancy.profile_alignment.window_rad=1", "--set", "service.state_save_period_s=3600"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    auto service = Start(args);
+    for (uint64_t seq = 1; seq <= kProfiles; ++seq) {
+      EXPECT_TRUE(SendFrame(seq, true, 1, seq <= kTrueFrames ? 0.0 : -0.2)) << service->Output();
+    }
+    return service;
+  }
+
+  // Publishes a correction and waits until the service has received it (its heartbeat counts
+  // `inputs` messages in: two for each frame, one for each correction).
+  void Correct(uint64_t version, double experience_x, uint64_t inputs, ChildProcess& service) {
+    map_pub_->Publish(Correction(version, experience_x));
+    ASSERT_TRUE(AwaitStatus([inputs](const msg::ServiceStatus& s) { return s.messages_in >= inputs; }))
+        << service.Output();
+  }
+
+  int SavedProfiles() {
+    occupancy::proto::OccupancyState state;
+    ReadStateFile(state_dir_.path() / "occupancy.pb", "rslam.occupancy.OccupancyState", 1, state);
+    return state.profiles_size();
+  }
+};
+
+TEST_F(SlowRebuildTest, AStopItsDeadlineEndsInTheLastRebuildHasSavedEveryProfileFirst) {
+  auto service = StartWithFrames({"--set", "service.stop_timeout_s=0.5"});
+  Correct(2, 0.5, 2 * kProfiles + 1, *service);  // a rebuild starts at once and takes seconds
+  service->Signal(SIGTERM);
+  ASSERT_EQ(service->WaitExit(10s), std::optional<int>(0)) << service->Output();
+  ASSERT_NE(service->Output().find("the stop did not finish within 500 ms"), std::string::npos)
+      << "the rebuild was not still under way when the deadline came\n" << service->Output();
+  EXPECT_EQ(SavedProfiles(), kProfiles) << service->Output();
+}
+
+TEST_F(SlowRebuildTest, AtTheStopARebuildOfAnOlderMapIsDroppedForTheNewestOne) {
+  auto service = StartWithFrames({"--set", "occupancy.rebuild_at_most_every_n_frames=1000", "--set",
+                                   "service.stop_timeout_s=30"});
+  Correct(2, 0.5, 2 * kProfiles + 1, *service);  // rebuilt at once, for seconds
+  Correct(3, 0.0, 2 * kProfiles + 2, *service);  // waits for that rebuild (and for 1000 frames)
+  service->Signal(SIGTERM);
+  const auto last = AwaitGrid([](const msg::OccupancyGrid& g) { return g.map_version >= 2; }, 30s);
+  ASSERT_EQ(service->WaitExit(30s), std::optional<int>(0)) << service->Output();
+  ASSERT_TRUE(last) << service->Output();
+  EXPECT_EQ(last->map_version, 3u) << "the grid of the older map was finished and published first";
+  EXPECT_TRUE(ShowsWallAhead(*last, kWallX)) << "the experience is back at the origin: the wall at 1 m";
+  EXPECT_NE(service->Output().find("map version 2: rebuild dropped for map version 3"), std::string::npos)
+      << service->Output();
+  EXPECT_EQ(service->Output().find("map version 2: rebuilt"), std::string::npos) << service->Output();
+  EXPECT_EQ(SavedProfiles(), kProfiles);
+}
+
 TEST_F(OccupancyServiceTest, AcceptsMonoImages) {
   auto service = Start();
   const cv::Mat bgr = renderer_.Render(Pose2D{}, 1);

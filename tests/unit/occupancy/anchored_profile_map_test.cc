@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <stop_token>
 #include <thread>
 
 namespace rslam::occupancy {
@@ -115,13 +116,42 @@ TEST(AnchoredProfileMapTest, AReplayOnAnotherThreadWhileProfilesKeepComingGivesT
   EXPECT_EQ(plan.moved, moved);
   EXPECT_EQ(plan.placements.size(), 40u);
   std::optional<OccupancyGrid> replayed;
-  std::thread replay([&] { replayed.emplace(AnchoredProfileMap::Replay(plan)); });
+  std::thread replay([&] { replayed = AnchoredProfileMap::Replay(plan); });
   fill(threaded, 40, 40);  // profiles kept meanwhile go into the live grid, then into the new one
   replay.join();
   const std::vector<int8_t> live = threaded.grid().ToRosCells();
   threaded.Adopt(std::move(*replayed), plan);
   EXPECT_EQ(threaded.grid().ToRosCells(), at_once.grid().ToRosCells());
   EXPECT_NE(live, at_once.grid().ToRosCells()) << "the live grid kept the old anchors until the adopt";
+}
+
+TEST(AnchoredProfileMapTest, AStoppedReplayIsDroppedAndTheNextPlanGivesTheNewestMapsGrid) {
+  // The occupancy node's stop: the replay of an older correction is stopped for the newer one
+  // waiting and never adopted. The next plan starts from the anchors the stopped plan moved and
+  // must give the grid of a rebuild on the newer correction alone.
+  const auto older = [](uint64_t id) -> std::optional<Pose2D> { return Pose2D{0.3 * static_cast<double>(id), -0.1, 0.2}; };
+  const auto newer = [](uint64_t id) -> std::optional<Pose2D> {
+    return Pose2D{-0.3 * static_cast<double>(id), 0.2, 0.5 * static_cast<double>(id)};
+  };
+  AnchoredProfileMap direct(Grid(), Model()), stopped(Grid(), Model());
+  for (AnchoredProfileMap* map : {&direct, &stopped})
+    for (int i = 0; i < 40; ++i) {
+      const Pose2D experience{0.05 * i, 0.02 * (i % 5), 0.1 * i};
+      map->AddProfile(static_cast<uint64_t>(i % 4), experience, Compose(experience, {0.1, 0.0, 0.3}), ObstacleAhead());
+    }
+  direct.Rebuild(newer);
+
+  AnchoredProfileMap::RebuildPlan plan = stopped.PlanRebuild(older);
+  std::stop_source stop;
+  stop.request_stop();
+  EXPECT_FALSE(AnchoredProfileMap::Replay(plan, stop.get_token()));
+  const std::vector<int8_t> before = stopped.grid().ToRosCells();
+  AnchoredProfileMap::RebuildPlan next = stopped.PlanRebuild(newer);
+  std::optional<OccupancyGrid> replayed = AnchoredProfileMap::Replay(next);
+  ASSERT_TRUE(replayed);
+  stopped.Adopt(std::move(*replayed), next);
+  EXPECT_EQ(stopped.grid().ToRosCells(), direct.grid().ToRosCells());
+  EXPECT_NE(before, direct.grid().ToRosCells()) << "the correction must change the grid for this to tell";
 }
 
 TEST(AnchoredProfileMapTest, RefusesCorruptStateWhole) {
