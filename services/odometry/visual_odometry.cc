@@ -339,6 +339,9 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
     const std::span<const float> previous(vrot_previous_.data() + first, width);
     const ProfileMatch match = BestProfileShift(current, previous, config_.max_shift_px, config_.min_overlap_px,
                                                 config_.normalise_profile_brightness);
+    const int widest = std::min(config_.max_shift_px, static_cast<int>(width) - config_.min_overlap_px - 1);
+    if (config_.edge_shift_reads_no_turn && match.shift != 0 && std::abs(match.shift) >= widest)
+      return std::pair{0, 0.0};
     double shift = match.shift;
     if (config_.subpixel_rotation)
       shift += SubpixelOffset(current, previous, match, config_.normalise_profile_brightness);

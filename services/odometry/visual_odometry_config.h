@@ -68,6 +68,14 @@ struct VisualOdometryConfig {
   // is matched: a wall close by at a slant shows stripes a pixel or two wide (the texture seen
   // edge-on), which a turn of a fraction of a pixel more or less changes column by column.
   int rotation_profile_smoothing_px = 0;
+  // A rotation match at the edge of the search (a shift of max_shift_px, or the widest the overlap
+  // allows) is no minimum: the profiles differ least as far apart as the search looks. Such a
+  // match reads no turn (with rotation_from_halves, that half stands still), so max_shift_px must
+  // exceed the fastest turn a frame holds (the demo's robot: 24 px a frame). Driving straight at
+  // a wall close by, both halves' matches ran to the edge, and the turn continuity above held
+  // it: 58 frames of 59 demo runs read 40 px (7.5 degrees) while the robot drove straight, each
+  // one of them wrong, one run 45 degrees in six frames (tools/demo/MEASUREMENTS.md, session 55).
+  bool edge_shift_reads_no_turn = false;
 
   template <class V>
   void VisitFields(V& v) {
@@ -99,6 +107,8 @@ struct VisualOdometryConfig {
       "steady turn on the spot, halves this many px apart: the one this near the last shift is the turn (0 = off)");
     v("turn_continuity_agreed_rate", turn_continuity_agreed_rate,
       "a turn on the spot goes on at the rate its halves last agreed on: halves apart take the half or whole crop nearest it");
+    v("edge_shift_reads_no_turn", edge_shift_reads_no_turn,
+      "a rotation match at the search's edge (max_shift_px) reads no turn: the least difference lies beyond it");
     v("rotation_profile_smoothing_px", rotation_profile_smoothing_px,
       "the rotation profile is smoothed by a moving mean over this many columns each side before matching (0 = off)");
   }

@@ -175,6 +175,27 @@ TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
   EXPECT_THROW(negative.Validate(), ConfigError);
 }
 
+TEST(VisualOdometryTest, AMatchAtTheSearchsEdgeReadsNoTurnWhenConfigured) {
+  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
+  const TwoHalves frame;
+  // Both halves' views move by `shift` px; 40 px is the edge of the search (max_shift_px 40).
+  const auto read = [&](bool halves, bool edge_reads_no_turn, int shift) {
+    VisualOdometryConfig config;
+    config.rotation_from_halves = halves;
+    config.edge_shift_reads_no_turn = edge_reads_no_turn;
+    VisualOdometry vo(config);
+    vo.Update(frame(400, 400), kDt);
+    return vo.Update(frame(400 - shift, 400 - shift), kDt).vrot * kDt / rad_per_px;
+  };
+  for (const bool halves : {false, true}) {
+    EXPECT_NEAR(read(halves, false, 39), 39.0, 1e-9) << "halves " << halves;
+    EXPECT_NEAR(read(halves, true, 39), 39.0, 1e-9) << "halves " << halves;
+    EXPECT_NEAR(read(halves, false, 40), 40.0, 1e-9) << "halves " << halves;
+    EXPECT_NEAR(read(halves, true, 40), 0.0, 1e-9) << "halves " << halves;
+    EXPECT_NEAR(read(halves, true, -40), 0.0, 1e-9) << "halves " << halves;
+  }
+}
+
 TEST(VisualOdometryTest, AgreedRateKeepsATurnWhoseHalvesAgreedUntilOneMismatches) {
   const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const TwoHalves frame;
@@ -191,7 +212,9 @@ TEST(VisualOdometryTest, AgreedRateKeepsATurnWhoseHalvesAgreedUntilOneMismatches
     VisualOdometry vo(config);
     vo.Update(frame(400, 400), kDt);
     EXPECT_NEAR(vo.Update(frame(380, 380), kDt).vrot * kDt / rad_per_px, 20.0, 0.2);
-    if (stop_between) EXPECT_NEAR(vo.Update(frame(380, 380), kDt).vrot * kDt / rad_per_px, 0.0, 0.1);
+    if (stop_between) {
+      EXPECT_NEAR(vo.Update(frame(380, 380), kDt).vrot * kDt / rad_per_px, 0.0, 0.1);
+    }
     return vo.Update(frame(360, 390), kDt).vrot * kDt / rad_per_px;
   };
   EXPECT_NEAR(after_mismatch(false, false), 0.0, 1e-9);
