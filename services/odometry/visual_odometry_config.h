@@ -73,8 +73,8 @@ struct VisualOdometryConfig {
   // match reads no turn (with rotation_from_halves, that half stands still), so max_shift_px must
   // exceed the fastest turn a frame holds (the demo's robot: 24 px a frame). Driving straight at
   // a wall close by, both halves' matches ran to the edge, and the turn continuity above held
-  // it: 58 frames of 59 demo runs read 40 px (7.5 degrees) while the robot drove straight, each
-  // one of them wrong, one run 45 degrees in six frames (tools/demo/MEASUREMENTS.md, session 55).
+  // it: 60 frames of 62 demo runs read 40 px (7.5 degrees), every one while the robot drove
+  // straight, one run 45 degrees in six frames (tools/demo/MEASUREMENTS.md, session 55).
   bool edge_shift_reads_no_turn = false;
 
   template <class V>

@@ -295,7 +295,7 @@ int RunDemo(const DemoOptions& options) {
   std::cout << "stopping: " << end_reason << std::endl;
   const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   const auto statuses_before_stop = supervisor.Statuses();
-  const bool stopped_cleanly = supervisor.StopAll(std::chrono::milliseconds(8000));
+  const bool stopped_cleanly = supervisor.StopAll();
   if (!stopped_cleanly) notes.push_back("some processes had to be killed at the end (see logs/demo.log)");
 
   // Results.
