@@ -136,6 +136,10 @@ double ShiftedProfileDifference(std::span<const float> current, std::span<const 
   return DifferenceAt(current, previous, prefix_current, prefix_previous, shift, match_gain);
 }
 
+int LargestSearchedShift(int width, int max_shift, int min_overlap) {
+  return std::max(std::min(max_shift, width - min_overlap - 1), 0);
+}
+
 ProfileMatch BestProfileShift(std::span<const float> current, std::span<const float> previous, int max_shift,
                               int min_overlap, bool match_gain) {
   const int w = static_cast<int>(current.size());
@@ -145,7 +149,8 @@ ProfileMatch BestProfileShift(std::span<const float> current, std::span<const fl
   PrefixSums(current, prefix_current);
   PrefixSums(previous, prefix_previous);
   ProfileMatch best{0, DifferenceAt(current, previous, prefix_current, prefix_previous, 0, match_gain)};
-  for (int magnitude = 1; magnitude <= max_shift && w - magnitude > min_overlap; ++magnitude) {
+  const int largest = LargestSearchedShift(w, max_shift, min_overlap);
+  for (int magnitude = 1; magnitude <= largest; ++magnitude) {
     for (int shift : {magnitude, -magnitude}) {
       // Abandoned once certainly not below the best: only a strictly smaller f wins.
       const double f = DifferenceAt(current, previous, prefix_current, prefix_previous, shift, match_gain,
@@ -339,8 +344,8 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
     const std::span<const float> previous(vrot_previous_.data() + first, width);
     const ProfileMatch match = BestProfileShift(current, previous, config_.max_shift_px, config_.min_overlap_px,
                                                 config_.normalise_profile_brightness);
-    const int widest = std::min(config_.max_shift_px, static_cast<int>(width) - config_.min_overlap_px - 1);
-    if (config_.edge_shift_reads_no_turn && match.shift != 0 && std::abs(match.shift) >= widest)
+    if (config_.edge_shift_reads_no_turn && match.shift != 0 &&
+        std::abs(match.shift) == LargestSearchedShift(static_cast<int>(width), config_.max_shift_px, config_.min_overlap_px))
       return std::pair{0, 0.0};
     double shift = match.shift;
     if (config_.subpixel_rotation)

@@ -66,7 +66,11 @@ struct ProfileMatch {
   double difference = 0;   // f(shift) (eq. 6)
 };
 
-// Searches |s| <= max_shift with w - |s| > min_overlap, smallest |s| first so equal
+// The largest |s| BestProfileShift tries on profiles `width` long: |s| <= max_shift with
+// width - |s| > min_overlap (0 when none is).
+int LargestSearchedShift(int width, int max_shift, int min_overlap);
+
+// Searches |s| <= LargestSearchedShift(w, max_shift, min_overlap), smallest |s| first so equal
 // differences prefer no motion.
 ProfileMatch BestProfileShift(std::span<const float> current, std::span<const float> previous, int max_shift,
                               int min_overlap, bool match_gain = false);
