@@ -151,7 +151,7 @@ class ExplorationPlanner {
   // Finer cells per coarse cell a side.
   int FinerPerCoarse() const { return config_.coarse_cell_factor / config_.finishing_cell_factor; }
   // True when the straight segment from `from` along its heading for distance_m passes within the
-  // robot radius of an obstacle reported since the last pirouette.
+  // robot radius of an obstacle reported since the last pirouette, closer than its start.
   bool PassesBlockingObstacle(const Pose2D& from, double distance_m) const;
   bool IsSetAside(int x, int y) const;
   // The way back of RecordMove, if the trail has a pose of finite transform cost.

@@ -19,8 +19,9 @@ struct TestGrid {
     for (int x = 0; x < w; ++x) { Set(x, 0, 100); Set(x, h - 1, 100); }
     for (int y = 0; y < h; ++y) { Set(0, y, 100); Set(w - 1, y, 100); }
   }
+  double resolution_m = 0.05;
   void Set(int x, int y, int8_t v) { cells[y * w + x] = v; }
-  GridView View() const { return GridView{w, h, 0.05, 0.0, 0.0, cells}; }
+  GridView View() const { return GridView{w, h, resolution_m, 0.0, 0.0, cells}; }
 };
 
 ExplorerConfig Config() {
@@ -1119,6 +1120,64 @@ TEST(ExplorationPlannerTest, ABumpTurnsTheNextPlansAwayFromTheWallAhead) {
   EXPECT_LT(std::cos(*heading), 0.5) << "first move heads " << *heading << " rad";
   EXPECT_TRUE(planner.set_aside_goals().empty());
   EXPECT_THROW(planner.ReportBump(first, {NAN, 0.0, 0.0}, false), std::invalid_argument);
+}
+
+TEST(ExplorationPlannerTest, ARobotBesideAnObstacleItWasRefusedOnStepsAwayFromIt) {
+  // Seen in demo run F6: the robot 18.7 cm from a wall (radius 20 cm) was refused a move along it
+  // that came closer. The obstacle, kept off, also refused every step away from it (each started
+  // within the radius of it), so the planner had nothing but the refused move: it was refused six
+  // times in 0.3 s without the robot moving, and a goal 5 m away (the passage south of the room)
+  // was set aside for good. Here: a wall along y = 1, the robot beside it, a move refused on the
+  // wall cell next to it.
+  TestGrid grid(60, 60, 0);
+  for (int x = 0; x < 60; ++x) grid.Set(x, 19, 100);  // cells' centres at y = 0.975
+  for (int y = 45; y < 59; ++y)
+    for (int x = 45; x < 59; ++x) grid.Set(x, y, -1);
+  ExplorerConfig config = Config();
+  config.robot_radius_m = 0.2;
+  config.coarse_cell_factor = 4;
+  for (const double gap : {0.12, 0.16, 0.18}) {  // from the wall cells' centres
+    ExplorationPlanner planner(config);
+    const Pose2D robot{1.5, 0.975 + gap, 0.0};
+    planner.ReportBlocked(Plan{}, std::pair{1.525, 0.975});
+    const Plan next = planner.PlanFrom(grid.View(), robot);
+    ASSERT_FALSE(next.complete) << next.reason;
+    EXPECT_NE(next.reason.find("stepping out"), std::string::npos) << gap << ": " << next.reason;
+    const std::optional<double> heading = FirstMoveHeading(next, robot);
+    ASSERT_TRUE(heading.has_value()) << next.reason;
+    EXPECT_GT(std::sin(*heading), 0.49) << gap << ": first move heads " << *heading << " rad";
+    ExpectMovesClear(planner, grid.View(), next, robot);
+  }
+}
+
+TEST(ExplorationPlannerTest, AWayOutThroughTheMarginPastAPostItsCellsCentresClearIsPlannedAroundThePost) {
+  // Seen in demo run F6: the way out through the dilation margin ran 18.75 cm from an obstacle
+  // (radius 20 cm) that no exploration cell's centre was within 20 cm of. Look before you move at
+  // planning time found it; keeping off the cells within the radius of the obstacle left the same
+  // way open, so each of the 20 plans made again was the same, the planner handed out the refused
+  // move, and it was refused six times in 0.5 s. Here, on the demo's 2.5-cm cells and 20-cm
+  // exploration cells: a passage 0.8 m wide (all margin), the robot at its closed end, a post
+  // beside the middle of it, and a room with unknown space past its open end.
+  TestGrid grid(128, 96, 0);
+  grid.resolution_m = 0.025;
+  for (int y = 0; y < 60; ++y) {  // the passage's walls, x = 0.5875 and 1.4125, up to y = 1.5
+    grid.Set(23, y, 100);
+    grid.Set(56, y, 100);
+  }
+  grid.Set(28, 31, 100);  // the post, centre (0.7125, 0.7875): 18.75 cm from x = 0.9
+  for (int y = 76; y < 95; ++y)
+    for (int x = 96; x < 127; ++x) grid.Set(x, y, -1);
+  ExplorerConfig config = Config();
+  config.robot_radius_m = 0.2;
+  config.coarse_cell_factor = 8;
+  ExplorationPlanner planner(config);
+  const Pose2D robot{0.9, 0.3, M_PI / 2};
+  const Plan plan = planner.PlanFrom(grid.View(), robot);
+  ASSERT_FALSE(plan.complete) << plan.reason;
+  ASSERT_TRUE(plan.has_target) << plan.reason;
+  EXPECT_GT(plan.target.y, 1.5) << plan.reason;
+  ExpectMovesClear(planner, grid.View(), plan, robot);
+  EXPECT_GE(ClosestApproach(plan, robot, 0.7125, 0.7875), 0.2);
 }
 
 }  // namespace
