@@ -411,8 +411,9 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   // neither the descent nor the escape goes through them.
   std::vector<uint8_t> near_blocking(n, 0);
   const auto keep_off_cell = [&](int x, int y) {
+    if (!cs.Contains(x, y)) return;
     const size_t i = static_cast<size_t>(y) * w + x;
-    if (!cs.Contains(x, y) || i == robot_index) return;  // the robot is where it is
+    if (i == robot_index) return;  // the robot is where it is
     traversable[i] = 0;
     near_blocking[i] = 1;
   };

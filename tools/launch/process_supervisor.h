@@ -40,9 +40,9 @@ class ProcessSupervisor {
   // Reaps exited children and restarts crashed ones whose backoff has passed. Call often.
   void Poll();
   // SIGTERM to all, wait up to grace, then SIGKILL. Returns true if all stopped in time. The
-  // default outlasts the demo config's service.stop_timeout_s (7 s), so a service ends a stop
+  // default outlasts the demo config's service.stop_timeout_s (10 s), so a service ends a stop
   // that runs long itself, with its state saved, before it could be killed.
-  bool StopAll(std::chrono::milliseconds grace = std::chrono::milliseconds(8000));
+  bool StopAll(std::chrono::milliseconds grace = std::chrono::milliseconds(11000));
   // SIGTERM (or SIGKILL) to one process by name, without restarting it.
   void Stop(const std::string& name, bool kill = false);
   // Sends a signal without changing the restart policy (a crash test kills with SIGKILL and
