@@ -13,11 +13,17 @@ namespace rslam::explorer {
 
 namespace {
 
-// Distance from (px, py) to the segment from (x0, y0) along (sx, sy).
-double DistanceToSegment(double px, double py, double x0, double y0, double sx, double sy) {
+// The point of the segment from (x0, y0) along (sx, sy) closest to (px, py).
+std::pair<double, double> ClosestOnSegment(double px, double py, double x0, double y0, double sx, double sy) {
   const double len2 = sx * sx + sy * sy;
   const double t = len2 > 0 ? std::clamp(((px - x0) * sx + (py - y0) * sy) / len2, 0.0, 1.0) : 0.0;
-  return std::hypot(px - (x0 + t * sx), py - (y0 + t * sy));
+  return {x0 + t * sx, y0 + t * sy};
+}
+
+// Distance from (px, py) to the segment from (x0, y0) along (sx, sy).
+double DistanceToSegment(double px, double py, double x0, double y0, double sx, double sy) {
+  const auto [cx, cy] = ClosestOnSegment(px, py, x0, y0, sx, sy);
+  return std::hypot(px - cx, py - cy);
 }
 
 // Plans made again within one PlanFrom because one of their own moves passed an obstacle.
@@ -631,11 +637,8 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       const double turn = WrapAngle(heading - theta);
       if (std::abs(turn) > 1e-9) plan.commands.push_back({MotionCommand::Kind::kRotate, turn, 0.0, 0});
       plan.commands.push_back({MotionCommand::Kind::kMove, 0.0, distance, 0});
-      if (!blocked && (blocked = ObstacleOnPath(occupancy, {x, y, heading}, distance))) {
-        const double c = std::cos(heading), s = std::sin(heading);
-        const double t = std::clamp((blocked->first - x) * c + (blocked->second - y) * s, 0.0, distance);
-        closest = {x + t * c, y + t * s};
-      }
+      if (!blocked && (blocked = ObstacleOnPath(occupancy, {x, y, heading}, distance)))
+        closest = ClosestOnSegment(blocked->first, blocked->second, x, y, wx - x, wy - y);
       x = wx;
       y = wy;
       theta = heading;
