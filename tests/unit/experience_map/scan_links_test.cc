@@ -9,7 +9,9 @@
 #include <random>
 #include <vector>
 
+#include "common/config/config_loader.h"
 #include "services/experience_map/experience_map.h"
+#include "services/experience_map/experience_map_node_config.h"
 #include "services/experience_map/scan_registration.h"
 
 namespace rslam::experience_map {
@@ -187,20 +189,22 @@ TEST(ScanLinks, TheSecondLapIsDrawnOnTheFirstWhereTheirWallsAgree) {
   EXPECT_EQ(with.map->links().size(), without.map->links().size());
 }
 
-// The demo's reach (deploy/config/demo.yaml): stretches up to 1.5 m apart in the map, corrected by
-// up to 1.2 m. A second lap the odometry put 0.8 m ahead of the first by one misread frame is out
+// The demo's reach (deploy/config/demo.yaml: stretches up to 1.5 m apart in the map, corrected by
+// up to 1.2 m). A second lap the odometry put 0.8 m ahead of the first by one misread frame is out
 // of the default reach (1 m, 0.5 m). In a demo run (G14) the map's first 660 experiences were so
 // put 1 m off the rest, which they met by one odometric link and no view.
 TEST(ScanLinks, TheDemosReachDrawsALapTheOdometryPutOffByAMisreadOnTheFirst) {
-  const auto reach = [](double radius_m, double correction_m) {
+  ExperienceMapNodeConfig demo;
+  LoadConfigSection(LoadYamlFile(RSLAM_SOURCE_DIR "/deploy/config/demo.yaml"), "experience_map", demo);
+  const auto reach = [](const ExperienceMapConfig& from) {
     return [=](ExperienceMapConfig& c) {
-      c.exp_scan_radius_m = radius_m;
-      c.exp_scan_max_correction_m = correction_m;
+      c.exp_scan_radius_m = from.exp_scan_radius_m;
+      c.exp_scan_max_correction_m = from.exp_scan_max_correction_m;
     };
   };
   const TwoLaps without = DriveTwoLaps(false, {}, std::nullopt, 0.8);
-  const TwoLaps near = DriveTwoLaps(true, reach(1.0, 0.5), std::nullopt, 0.8);
-  const TwoLaps far = DriveTwoLaps(true, reach(1.5, 1.2), std::nullopt, 0.8);
+  const TwoLaps near = DriveTwoLaps(true, reach(ExperienceMapConfig{}), std::nullopt, 0.8);
+  const TwoLaps far = DriveTwoLaps(true, reach(demo.map), std::nullopt, 0.8);
   const double off = SecondLapError(without), near_off = SecondLapError(near), far_off = SecondLapError(far);
   EXPECT_GT(off, 0.6) << "the misread puts the second lap off";
   EXPECT_GT(near_off, 0.9 * off) << off << " -> " << near_off;  // no registration within reach
