@@ -18,6 +18,7 @@
 
 #include "common/bus/bus_config.h"
 #include "common/config/config_loader.h"
+#include "common/node/service_context.h"
 #include "common/node/shutdown_signal.h"
 #include "tools/demo/demo_artifacts.h"
 #include "tools/demo/demo_metrics.h"
@@ -185,6 +186,10 @@ int RunDemo(const DemoOptions& options) {
   experience_map::ExperienceMapNodeConfig map_config;
   LoadConfigSection(root, "experience_map", map_config);
   const Pose2D map_origin = MapOrigin(start, map_config.map.exp_initial_em_deg * std::numbers::pi / 180);
+  // Each service bounds its own stop by service.stop_timeout_s (its state saved first); the launcher
+  // kills a second after that.
+  ServiceRuntimeConfig runtime;
+  LoadConfigSection(root, "service", runtime);
 
   std::cout << "rslam demo: " << world_path << " (" << reachable.size() << " reachable free cells), start ("
             << start.x << ", " << start.y << ", " << start.theta << "), " << dds << " domain " << domain
@@ -295,7 +300,8 @@ int RunDemo(const DemoOptions& options) {
   std::cout << "stopping: " << end_reason << std::endl;
   const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   const auto statuses_before_stop = supervisor.Statuses();
-  const bool stopped_cleanly = supervisor.StopAll();
+  const bool stopped_cleanly =
+      supervisor.StopAll(std::chrono::milliseconds(std::llround((runtime.stop_timeout_s + 1) * 1000)));
   if (!stopped_cleanly) notes.push_back("some processes had to be killed at the end (see logs/demo.log)");
 
   // Results.

@@ -39,10 +39,10 @@ class ProcessSupervisor {
   void Start(const ProcessSpec& spec);
   // Reaps exited children and restarts crashed ones whose backoff has passed. Call often.
   void Poll();
-  // SIGTERM to all, wait up to grace, then SIGKILL. Returns true if all stopped in time. The
-  // default outlasts the demo config's service.stop_timeout_s (10 s), so a service ends a stop
-  // that runs long itself, with its state saved, before it could be killed.
-  bool StopAll(std::chrono::milliseconds grace = std::chrono::milliseconds(11000));
+  // SIGTERM to all, wait up to grace, then SIGKILL. Returns true if all stopped in time. A grace
+  // longer than the services' service.stop_timeout_s lets a service end a stop that runs long
+  // itself, with its state saved, before it could be killed (rslam demo passes its config's).
+  bool StopAll(std::chrono::milliseconds grace = std::chrono::milliseconds(8000));
   // SIGTERM (or SIGKILL) to one process by name, without restarting it.
   void Stop(const std::string& name, bool kill = false);
   // Sends a signal without changing the restart policy (a crash test kills with SIGKILL and
