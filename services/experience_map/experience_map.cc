@@ -470,7 +470,7 @@ void ExperienceMap::TryScanLink(uint32_t a) {
   scan.link.d_m = std::hypot(r->pose.x, r->pose.y);
   scan.link.heading_rad = std::atan2(r->pose.y, r->pose.x);
   scan.link.facing_rad = r->pose.theta;
-  scan.walls = r->walls;
+  scan.information = r->information;
   if (config_.exp_scan_confirm_ids > 0) {
     const bool confirmed = last_scan_ &&
                            a - last_scan_->link.to_id <= static_cast<uint32_t>(config_.exp_scan_confirm_ids) &&
@@ -771,9 +771,13 @@ proto::ExperienceMap ExperienceMap::Save() const {
   for (const Link& l : links_) save_link(l, m.add_links());
   const auto save_scan = [&](const ScanLink& l, proto::ScanLink* p) {
     save_link(l.link, p->mutable_link());
-    p->set_walls_xx(l.walls(0, 0));
-    p->set_walls_xy(l.walls(0, 1));
-    p->set_walls_yy(l.walls(1, 1));
+    const Eigen::Matrix3d& i = l.information;
+    p->set_walls_xx(i(0, 0));
+    p->set_walls_xy(i(0, 1));
+    p->set_walls_yy(i(1, 1));
+    p->set_turn_x(i(0, 2));
+    p->set_turn_y(i(1, 2));
+    p->set_turn_turn(i(2, 2));
   };
   for (const ScanLink& l : scan_links_) save_scan(l, m.add_scan_links());
   m.set_has_current(has_current_);
@@ -841,7 +845,8 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   for (const auto& l : m.links()) check_link(l);
   const auto check_scan = [&](const proto::ScanLink& l) {
     check_link(l.link());
-    if (!finite({l.walls_xx(), l.walls_xy(), l.walls_yy()})) Reject("saved scan link's walls are not finite");
+    if (!finite({l.walls_xx(), l.walls_xy(), l.walls_yy(), l.turn_x(), l.turn_y(), l.turn_turn()}))
+      Reject("saved scan link's information is not finite");
   };
   for (const auto& l : m.scan_links()) check_scan(l);
   if (m.has_last_scan()) check_scan(m.last_scan());
@@ -906,7 +911,9 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
     const proto::Link& l = p.link();
     ScanLink scan;
     scan.link = {l.from_id(), l.to_id(), l.d_m(), l.heading_rad(), l.facing_rad(), 0.0, 1, false};
-    scan.walls << p.walls_xx(), p.walls_xy(), p.walls_xy(), p.walls_yy();
+    scan.information << p.walls_xx(), p.walls_xy(), p.turn_x(),  //
+        p.walls_xy(), p.walls_yy(), p.turn_y(),                     //
+        p.turn_x(), p.turn_y(), p.turn_turn();
     return scan;
   };
   for (const auto& p : m.scan_links()) scan_links_.push_back(load_scan(p));

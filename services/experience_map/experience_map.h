@@ -77,11 +77,13 @@ struct Link {
 
 // exp_scan_links: two stretches of the map whose walls were registered (scan_registration.h);
 // never traversed, and not among the map's links. link: the newer experience's pose in the older's
-// frame (from = older); walls: the scatter of the walls' normals in the older's frame, which
-// weighs the registered position by direction (along a lone wall it says nothing).
+// frame (from = older); information: what the registration measured of it, in the older's frame
+// (ScanRegistration::information), which weighs it by direction: along a lone wall, or turned
+// about a round table's centre, it says nothing. A link saved before the turn was measured has
+// zeros in its turn row (its facing is then weighed by exp_graph_scan_sigma_rad).
 struct ScanLink {
   Link link;
-  Eigen::Matrix2d walls = Eigen::Matrix2d::Identity() / 2;
+  Eigen::Matrix3d information = Eigen::DiagonalMatrix<double, 3>(0.5, 0.5, 0.0);
 };
 
 // What a least-squares correction (pose_graph.h) did.

@@ -130,9 +130,10 @@ struct ExperienceMapConfig {
   // pair distance under exp_scan_max_distance_m, exp_scan_min_inlier_share of a's points on the
   // other's walls, walls facing enough ways to fix the pose along them (exp_scan_min_weak_share)
   // and a correction of the map within exp_scan_max_correction_m / _rad becomes a link of its own
-  // in the least squares (sigmas exp_graph_scan_sigma_m / _rad, the closures' robust kernel): the
-  // same walls seen on two visits are drawn in one place whether or not a view recognised it. Scan
-  // links are never traversed, and are not among the map's links.
+  // in the least squares, weighed by what the registration measured (exp_graph_scan_sigma_m,
+  // pose_graph.h; the closures' robust kernel): the same walls seen on two visits are drawn in one
+  // place whether or not a view recognised it. Scan links are never traversed, and are not among
+  // the map's links.
   //
   // With exp_scan_confirm_ids > 0 a registration waits until another confirms it: one made
   // around an experience at most that many ids later whose measurement closes the loop the two
@@ -240,8 +241,10 @@ struct ExperienceMapConfig {
       "> 0: a registration is kept once another around an experience at most this many ids later agrees with it");
     v("exp_scan_confirm_m", exp_scan_confirm_m, "... closing the loop of the two and the map within this (m)");
     v("exp_scan_confirm_rad", exp_scan_confirm_rad, "... and this (rad)");
-    v("exp_graph_scan_sigma_m", exp_graph_scan_sigma_m, "uncertainty of a scan link's position (m)");
-    v("exp_graph_scan_sigma_rad", exp_graph_scan_sigma_rad, "uncertainty of a scan link's facing (rad)");
+    v("exp_graph_scan_sigma_m", exp_graph_scan_sigma_m,
+      "uncertainty of a scan link's wall distances (m): weighted by 2 x its registration's information / this^2");
+    v("exp_graph_scan_sigma_rad", exp_graph_scan_sigma_rad,
+      "uncertainty of the facing of a scan link saved without its turn measured (rad)");
   }
 
   void Validate() const {

@@ -103,10 +103,9 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
                l.closes_loop ? sigmas.closure_robust_phi : 0.0);
     }
     for (const ScanLink& l : scan_links) {
-      // Across the walls as the registration saw them (2 x walls is I for walls facing every way).
-      Eigen::Matrix3d weight = Eigen::Matrix3d::Zero();
-      weight.topLeftCorner<2, 2>() = 2 * l.walls / (sigmas.scan_m * sigmas.scan_m);
-      weight(2, 2) = 1 / (sigmas.scan_rad * sigmas.scan_rad);
+      // As the registration measured it (its position block is I / 2 for walls facing every way).
+      Eigen::Matrix3d weight = 2 * l.information / (sigmas.scan_m * sigmas.scan_m);
+      if (l.information(2, 2) == 0) weight(2, 2) = 1 / (sigmas.scan_rad * sigmas.scan_rad);  // saved before
       add_link(l.link, weight, sigmas.closure_robust_phi);
     }
     if (manhattan) {

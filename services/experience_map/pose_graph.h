@@ -51,9 +51,10 @@ struct ManhattanAxes {
 };
 
 // Runs up to `iterations` Gauss-Newton steps over all experiences, links and scan links (the same
-// error as a link's; its position weighted by 2 x walls / scan_m^2, so only across the walls the
-// registration saw, its facing by 1 / scan_rad^2), fewer when a step moves nothing by more than
-// stop_below (m or rad). Links must name existing experiences.
+// error as a link's, weighted by 2 x information / scan_m^2, so only as far as the registration
+// measured it; a link whose turn was not measured has its facing weighted by 1 / scan_rad^2),
+// fewer when a step moves nothing by more than stop_below (m or rad). Links must name existing
+// experiences.
 PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
                                   const std::vector<ScanLink>& scan_links,
                                   const PoseGraphSigmas& sigmas, int iterations, double stop_below = 0.0,

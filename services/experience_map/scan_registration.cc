@@ -92,7 +92,7 @@ double Median(std::vector<double>& values) {
 }  // namespace
 
 double ScanRegistration::weak_share() const {
-  return std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(walls).eigenvalues()[0]);
+  return std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(walls()).eigenvalues()[0]);
 }
 
 std::optional<ScanRegistration> RegisterScans(std::span<const Eigen::Vector2f> target,
@@ -105,14 +105,12 @@ std::optional<ScanRegistration> RegisterScans(std::span<const Eigen::Vector2f> t
   Pose2D pose = initial;
   double pair_m = options.max_pair_m;
   std::vector<double> distances;
-  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
   ScanRegistration result;
   for (int iteration = 0; iteration < options.iterations; ++iteration) {
     const double c = std::cos(pose.theta), s = std::sin(pose.theta);
     Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
     distances.clear();
-    scatter.setZero();
     for (const Eigen::Vector2f& point : source) {
       const double px = point.x(), py = point.y();
       const Eigen::Vector2d moved(pose.x + c * px - s * py, pose.y + s * px + c * py);
@@ -125,11 +123,11 @@ std::optional<ScanRegistration> RegisterScans(std::span<const Eigen::Vector2f> t
       h += j * j.transpose();
       g += j * r;
       distances.push_back(distance);
-      scatter += n * n.transpose();
     }
     if (distances.size() < 3) return std::nullopt;
     result.pairs = static_cast<int>(distances.size());
     result.median_distance_m = Median(distances);
+    result.information = h / result.pairs;
     const Eigen::Vector3d step = -(h + 1e-9 * Eigen::Matrix3d::Identity()).lu().solve(g);
     if (!step.allFinite()) return std::nullopt;
     pose = {pose.x + step.x(), pose.y + step.y(), WrapAngle(pose.theta + step.z())};
@@ -137,7 +135,6 @@ std::optional<ScanRegistration> RegisterScans(std::span<const Eigen::Vector2f> t
     if (step.head<2>().norm() < 1e-4 && std::abs(step.z()) < 1e-4) break;
   }
   result.pose = pose;
-  result.walls = scatter / result.pairs;
   const double c = std::cos(pose.theta), s = std::sin(pose.theta);
   int inliers = 0;
   for (const Eigen::Vector2f& point : source) {

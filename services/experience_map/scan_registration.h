@@ -10,10 +10,13 @@
 // The pairing distance starts at max_pair_m and shrinks to three times the pairs' median distance
 // (at least min_pair_m), so the far pairs of a first guess pull only while they must.
 //
-// A wall seen alone fixes the pose across it, not along it: `walls` is the scatter of the pairs'
-// normals (sum of n n^T / pairs, in the target frame; eigenvalues summing to 1), diag(0, 1) for
-// one straight wall along x, I / 2 when the walls face every way. It says in which directions the
-// registered position is measured and in which it is a guess.
+// What the pairs measure of the pose is `information`: sum of J^T J / pairs at the last step, J
+// the derivative of a pair's distance along its normal n by (x, y, theta), in the target frame.
+// A wall seen alone fixes the position across it, not along it: the position block (`walls()`,
+// the scatter of the normals; eigenvalues summing to 1) is diag(0, 1) for one straight wall along
+// x, I / 2 when the walls face every way. The turn entries are lever arms (m, m^2): the arc of a
+// round table registers as well turned about its centre, and leaves that motion, a turn with the
+// position that goes with it, unmeasured (the matrix singular along it), where a corner fixes it.
 //
 // Pure and deterministic.
 
@@ -38,8 +41,9 @@ struct ScanRegistration {
   int pairs = 0;                   // at the last step
   double median_distance_m = 0.0;  // of the pairs' points at the last step
   double inlier_share = 0.0;       // source points within 2 x cell_m of a target point
-  Eigen::Matrix2d walls = Eigen::Matrix2d::Zero();  // see above
-  double weak_share() const;       // the smaller eigenvalue of walls: 0 (one wall) to 0.5
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // see above
+  Eigen::Matrix2d walls() const { return information.topLeftCorner<2, 2>(); }
+  double weak_share() const;       // the smaller eigenvalue of walls(): 0 (one wall) to 0.5
 };
 
 // nullopt when either set has fewer than 3 points or no step finds 3 pairs.

@@ -1,5 +1,6 @@
 // Scan links (experience_map_config.h, exp_scan_links): the walls two stretches of the map see,
 // registered (scan_registration.h) and tied in the least squares.
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,6 +13,7 @@
 #include "common/config/config_loader.h"
 #include "services/experience_map/experience_map.h"
 #include "services/experience_map/experience_map_node_config.h"
+#include "services/experience_map/pose_graph.h"
 #include "services/experience_map/scan_registration.h"
 
 namespace rslam::experience_map {
@@ -92,11 +94,75 @@ TEST(ScanRegistration, ALoneWallFixesThePositionAcrossItOnly) {
   const std::optional<ScanRegistration> r = RegisterScans(wall, Moved(wall, {0.1, 0.05, 0.0}), {});
   ASSERT_TRUE(r);
   EXPECT_LT(r->weak_share(), 0.01);
-  EXPECT_NEAR(r->walls(1, 1), 1.0, 0.01);  // normals along y: the wall runs along x
+  EXPECT_NEAR(r->walls()(1, 1), 1.0, 0.01);  // normals along y: the wall runs along x
   EXPECT_NEAR(r->pose.y, -0.05, 0.005);   // across the wall: measured
 
   EXPECT_FALSE(RegisterScans(wall, std::vector<Eigen::Vector2f>(wall.begin(), wall.begin() + 2), {}));
   EXPECT_FALSE(RegisterScans(wall, Moved(wall, {0.0, 2.0, 0.0}), {}));  // nothing to pair with
+}
+
+// The arc of a round table (radius 0.6 m, centre c) seen over 120 degrees.
+std::vector<Eigen::Vector2f> Arc(const Eigen::Vector2d& c) {
+  std::vector<Eigen::Vector2f> arc;
+  for (int i = 0; i <= 50; ++i) {
+    const double a = 2.0 + 2.1 * i / 50.0;
+    arc.emplace_back(static_cast<float>(c.x() + 0.6 * std::cos(a)), static_cast<float>(c.y() + 0.6 * std::sin(a)));
+  }
+  return arc;
+}
+
+// Turning the source frame about c by one radian moves it by (c_y, -c_x, 1) at the identity.
+Eigen::Vector3d TurnAbout(const Eigen::Vector2d& c) { return Eigen::Vector3d(c.y(), -c.x(), 1.0).normalized(); }
+
+TEST(ScanRegistration, AnArcLeavesATurnAboutItsCentreUnmeasuredWhereACornerFixesIt) {
+  const Eigen::Vector2d c(1.5, 0.3);
+  const std::vector<Eigen::Vector2f> arc = Arc(c);
+  const std::optional<ScanRegistration> r = RegisterScans(arc, Moved(arc, {0.03, -0.02, 0.0}), {});
+  ASSERT_TRUE(r);
+  const Eigen::Vector3d v = TurnAbout(c);
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(r->information).eigenvalues()[2];
+  EXPECT_LT(v.dot(r->information * v), 1e-3 * largest);
+  EXPECT_GT(r->weak_share(), 0.1) << "its normals face many ways: the position alone looks measured";
+
+  const std::vector<Segment> room = Room();
+  const Pose2D a{2.0, 0.0, 0.3}, b{2.3, 0.2, 0.45};
+  const std::optional<ScanRegistration> corner = RegisterScans(Boundary(room, a), Boundary(room, b), Between(a, b));
+  ASSERT_TRUE(corner);
+  const Eigen::Vector3d e = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(corner->information).eigenvalues();
+  EXPECT_GT(e[0], 0.02 * e[2]) << "a corner measures every motion";
+}
+
+// Two experiences an odometric link holds loosely (0.1 m, 0.05 rad), and a scan link that measures the second
+// turned 0.1 rad about an arc's centre (the arc registers as well turned): weighed by what the
+// registration measured it moves the map little; with its turn unmeasured (a link saved before)
+// its facing pulls the map round.
+TEST(ScanLinks, AnArcsRegistrationTurnedAboutItsCentreDoesNotTurnTheMap) {
+  const Eigen::Vector2d c(1.5, 0.3);
+  const std::vector<Eigen::Vector2f> arc = Arc(c);
+  const std::optional<ScanRegistration> r = RegisterScans(arc, Moved(arc, {0.03, -0.02, 0.0}), {});
+  ASSERT_TRUE(r);
+  const Pose2D turned = Compose({c.x(), c.y(), 0.1}, {-c.x(), -c.y(), 0.0});  // about c
+  const auto solve = [&](const Eigen::Matrix3d& information) {
+    std::vector<Experience> experiences(2);
+    experiences[1].id = 1;
+    const std::vector<Link> links = {{0, 1, 0.0, 0.0, 0.0}};
+    ScanLink scan;
+    scan.link = {0, 1, std::hypot(turned.x, turned.y), std::atan2(turned.y, turned.x), turned.theta};
+    scan.information = information;
+    PoseGraphSigmas sigmas{0.1, 0.05, 0.1, 0.01};
+    sigmas.scan_m = 0.02;
+    sigmas.scan_rad = 0.01;
+    OptimisePoseGraph(experiences, links, {scan}, sigmas, 10);
+    return experiences[1].pose();
+  };
+  const Pose2D measured = solve(r->information);
+  EXPECT_LT(std::abs(measured.theta), 0.005);
+  EXPECT_LT(std::hypot(measured.x, measured.y), 0.015);  // the turn's curve off its tangent: 0.008 m
+  Eigen::Matrix3d unmeasured_turn = r->information;
+  unmeasured_turn.row(2).setZero();
+  unmeasured_turn.col(2).setZero();
+  const Pose2D before = solve(unmeasured_turn);
+  EXPECT_GT(before.theta, 0.08);
 }
 
 // Two laps of a loop in the room, dead-reckoned with odometry that turns 0.4% too far and drives 2%
@@ -180,7 +246,7 @@ TEST(ScanLinks, TheSecondLapIsDrawnOnTheFirstWhereTheirWallsAgree) {
   ASSERT_GT(with.map->scan_links().size(), 10u);
   for (const ScanLink& l : with.map->scan_links()) {
     EXPECT_LT(l.link.from_id + 40, l.link.to_id + 1);  // only old stretches
-    EXPECT_NEAR(l.walls.trace(), 1.0, 1e-9);
+    EXPECT_NEAR((l.information.topLeftCorner<2, 2>().trace()), 1.0, 1e-9);
   }
   const double before = SecondLapError(without), after = SecondLapError(with);
   EXPECT_GT(before, 0.1) << "the odometry drifts";
@@ -281,6 +347,8 @@ TEST(ScanLinks, SaveLoadKeepsTheWallsAndTheLinksAndRefusesBrokenOnes) {
   loaded.Load(saved);
   EXPECT_EQ(loaded.Save().SerializeAsString(), saved.SerializeAsString());
   ASSERT_EQ(loaded.scan_links().size(), run.map->scan_links().size());
+  EXPECT_EQ(loaded.scan_links()[0].information, run.map->scan_links()[0].information);
+  EXPECT_GT(loaded.scan_links()[0].information(2, 2), 0.0);  // the turn, measured
   EXPECT_EQ(loaded.experiences()[10].scan, run.map->experiences()[10].scan);
 
   proto::ExperienceMap odd = saved;
@@ -291,6 +359,9 @@ TEST(ScanLinks, SaveLoadKeepsTheWallsAndTheLinksAndRefusesBrokenOnes) {
   EXPECT_THROW(loaded.Load(unknown), std::invalid_argument);
   proto::ExperienceMap nan = saved;
   nan.mutable_scan_links(0)->set_walls_xy(std::nan(""));
+  EXPECT_THROW(loaded.Load(nan), std::invalid_argument);
+  nan = saved;
+  nan.mutable_scan_links(0)->set_turn_turn(std::nan(""));
   EXPECT_THROW(loaded.Load(nan), std::invalid_argument);
   EXPECT_EQ(loaded.Save().SerializeAsString(), saved.SerializeAsString()) << "a refused load changes nothing";
 
