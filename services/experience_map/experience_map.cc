@@ -499,7 +499,6 @@ PoseGraphResult ExperienceMap::OptimiseGraph(int iterations, double stop_below) 
                          config_.exp_graph_closure_sigma_m, config_.exp_graph_closure_sigma_rad,
                          config_.exp_graph_closure_robust_phi};
   sigmas.scan_m = config_.exp_graph_scan_sigma_m;
-  sigmas.scan_rad = config_.exp_graph_scan_sigma_rad;
   const PoseGraphResult result = OptimisePoseGraph(
       experiences_, links_, scan_links_, sigmas,
       iterations, stop_below,
@@ -907,13 +906,18 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   }
   scan_links_.clear();
   last_scan_.reset();
-  const auto load_scan = [](const proto::ScanLink& p) {
+  // A link saved before its turn was measured (turn entries zero) has its facing weighed as it
+  // was then, by 1 / exp_graph_scan_sigma_rad^2.
+  const double unmeasured_turn = config_.exp_graph_scan_sigma_m * config_.exp_graph_scan_sigma_m /
+                                 (2 * config_.exp_graph_scan_sigma_rad * config_.exp_graph_scan_sigma_rad);
+  const auto load_scan = [unmeasured_turn](const proto::ScanLink& p) {
     const proto::Link& l = p.link();
     ScanLink scan;
     scan.link = {l.from_id(), l.to_id(), l.d_m(), l.heading_rad(), l.facing_rad(), 0.0, 1, false};
     scan.information << p.walls_xx(), p.walls_xy(), p.turn_x(),  //
         p.walls_xy(), p.walls_yy(), p.turn_y(),                     //
         p.turn_x(), p.turn_y(), p.turn_turn();
+    if (p.turn_turn() == 0) scan.information(2, 2) = unmeasured_turn;
     return scan;
   };
   for (const auto& p : m.scan_links()) scan_links_.push_back(load_scan(p));

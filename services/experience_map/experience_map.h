@@ -79,11 +79,11 @@ struct Link {
 // never traversed, and not among the map's links. link: the newer experience's pose in the older's
 // frame (from = older); information: what the registration measured of it, in the older's frame
 // (ScanRegistration::information), which weighs it by direction: along a lone wall, or turned
-// about a round table's centre, it says nothing. A link saved before the turn was measured has
-// zeros in its turn row (its facing is then weighed by exp_graph_scan_sigma_rad).
+// about a round table's centre, it says nothing. A link loaded from a file saved before the turn
+// was measured has its facing weighed by exp_graph_scan_sigma_rad (ExperienceMap::Load).
 struct ScanLink {
   Link link;
-  Eigen::Matrix3d information = Eigen::DiagonalMatrix<double, 3>(0.5, 0.5, 0.0);
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
 };
 
 // What a least-squares correction (pose_graph.h) did.

@@ -104,9 +104,7 @@ PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const st
     }
     for (const ScanLink& l : scan_links) {
       // As the registration measured it (its position block is I / 2 for walls facing every way).
-      Eigen::Matrix3d weight = 2 * l.information / (sigmas.scan_m * sigmas.scan_m);
-      if (l.information(2, 2) == 0) weight(2, 2) = 1 / (sigmas.scan_rad * sigmas.scan_rad);  // saved before
-      add_link(l.link, weight, sigmas.closure_robust_phi);
+      add_link(l.link, Eigen::Matrix3d(2 * l.information / (sigmas.scan_m * sigmas.scan_m)), sigmas.closure_robust_phi);
     }
     if (manhattan) {
       // A unary term on theta: every free experience has a theta diagonal entry from its links,

@@ -29,7 +29,7 @@ struct PoseGraphSigmas {
   double link_m, link_rad;        // odometric link
   double closure_m, closure_rad;  // link made by recognising a place
   double closure_robust_phi = 0;   // > 0: scale down closures and scan links that disagree (see pose_graph.cc)
-  double scan_m = 1, scan_rad = 1;  // scan link (the walls of two stretches registered)
+  double scan_m = 1;               // scan link: its wall distances (the walls of two stretches registered)
 };
 
 // (1 - (r / limit)^2)^2 within the limit, 0 past it: 1 at r = 0, 0.56 at half the limit. A wall's
@@ -52,9 +52,8 @@ struct ManhattanAxes {
 
 // Runs up to `iterations` Gauss-Newton steps over all experiences, links and scan links (the same
 // error as a link's, weighted by 2 x information / scan_m^2, so only as far as the registration
-// measured it; a link whose turn was not measured has its facing weighted by 1 / scan_rad^2),
-// fewer when a step moves nothing by more than stop_below (m or rad). Links must name existing
-// experiences.
+// measured it), fewer when a step moves nothing by more than stop_below (m or rad). Links must
+// name existing experiences.
 PoseGraphResult OptimisePoseGraph(std::vector<Experience>& experiences, const std::vector<Link>& links,
                                   const std::vector<ScanLink>& scan_links,
                                   const PoseGraphSigmas& sigmas, int iterations, double stop_below = 0.0,

@@ -132,10 +132,10 @@ TEST(ScanRegistration, AnArcLeavesATurnAboutItsCentreUnmeasuredWhereACornerFixes
   EXPECT_GT(e[0], 0.02 * e[2]) << "a corner measures every motion";
 }
 
-// Two experiences an odometric link holds loosely (0.1 m, 0.05 rad), and a scan link that measures the second
-// turned 0.1 rad about an arc's centre (the arc registers as well turned): weighed by what the
-// registration measured it moves the map little; with its turn unmeasured (a link saved before)
-// its facing pulls the map round.
+// Two experiences an odometric link holds loosely (0.1 m, 0.05 rad), and a scan link that
+// measures the second turned 0.1 rad about an arc's centre (the arc registers as well turned):
+// weighed by what the registration measured it moves the map little; weighed as before this
+// session (its position by the walls, its facing by 1 / 0.01^2) it pulls the map round.
 TEST(ScanLinks, AnArcsRegistrationTurnedAboutItsCentreDoesNotTurnTheMap) {
   const Eigen::Vector2d c(1.5, 0.3);
   const std::vector<Eigen::Vector2f> arc = Arc(c);
@@ -151,7 +151,6 @@ TEST(ScanLinks, AnArcsRegistrationTurnedAboutItsCentreDoesNotTurnTheMap) {
     scan.information = information;
     PoseGraphSigmas sigmas{0.1, 0.05, 0.1, 0.01};
     sigmas.scan_m = 0.02;
-    sigmas.scan_rad = 0.01;
     OptimisePoseGraph(experiences, links, {scan}, sigmas, 10);
     return experiences[1].pose();
   };
@@ -161,6 +160,7 @@ TEST(ScanLinks, AnArcsRegistrationTurnedAboutItsCentreDoesNotTurnTheMap) {
   Eigen::Matrix3d unmeasured_turn = r->information;
   unmeasured_turn.row(2).setZero();
   unmeasured_turn.col(2).setZero();
+  unmeasured_turn(2, 2) = 0.02 * 0.02 / (2 * 0.01 * 0.01);  // 2 x this / 0.02^2 = 1 / 0.01^2
   const Pose2D before = solve(unmeasured_turn);
   EXPECT_GT(before.theta, 0.08);
 }
@@ -349,6 +349,13 @@ TEST(ScanLinks, SaveLoadKeepsTheWallsAndTheLinksAndRefusesBrokenOnes) {
   ASSERT_EQ(loaded.scan_links().size(), run.map->scan_links().size());
   EXPECT_EQ(loaded.scan_links()[0].information, run.map->scan_links()[0].information);
   EXPECT_GT(loaded.scan_links()[0].information(2, 2), 0.0);  // the turn, measured
+  proto::ExperienceMap older = saved;  // saved before the turn was measured
+  for (auto& l : *older.mutable_scan_links()) l.clear_turn_x(), l.clear_turn_y(), l.clear_turn_turn();
+  ExperienceMap from_older(run.map->config());
+  from_older.Load(older);
+  const ExperienceMapConfig& c = run.map->config();
+  EXPECT_DOUBLE_EQ(2 * from_older.scan_links()[0].information(2, 2) / (c.exp_graph_scan_sigma_m * c.exp_graph_scan_sigma_m),
+                   1 / (c.exp_graph_scan_sigma_rad * c.exp_graph_scan_sigma_rad));  // the facing weighed as then
   EXPECT_EQ(loaded.experiences()[10].scan, run.map->experiences()[10].scan);
 
   proto::ExperienceMap odd = saved;
