@@ -51,7 +51,7 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   const std::string output = demo.Output();
 
   for (const char* file : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid_errors.png", "grid.pgm",
-                           "grid.yaml"})
+                           "grid.yaml", "experiences.csv"})
     EXPECT_TRUE(fs::exists(out / file) && fs::file_size(out / file) > 0) << file << "\n" << output;
   std::ifstream in(out / "summary.json");
   ASSERT_TRUE(in.good());

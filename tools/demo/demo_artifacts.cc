@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <iomanip>
+#include <map>
 #include <stdexcept>
 
 #include "tools/demo/demo_metrics.h"
@@ -38,6 +40,39 @@ void WriteMapServerGrid(const msg::OccupancyGrid& grid, const std::filesystem::p
   meta << "image: " << pgm.filename().string() << "\nresolution: " << grid.resolution_m << "\norigin: ["
        << grid.origin_x_m << ", " << grid.origin_y_m << ", 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n";
   if (!image || !meta) throw std::runtime_error("cannot write " + pgm.string() + " / " + yaml.string());
+}
+
+void WriteExperiencesCsv(const msg::ExperienceMap& map, const DemoObservations& seen,
+                         const eval::TrajectoryError* alignment, const std::filesystem::path& path) {
+  std::map<uint64_t, const FramePose*> truth_at;
+  for (const auto& t : seen.ground_truth) truth_at[t.frame_seq] = &t;
+  std::ofstream csv(path);
+  // The first four columns as `rslam run`'s experiences.csv.
+  csv << "id,x,y,theta,frame_seq,truth_x,truth_y,truth_theta,aligned_x,aligned_y,error_m\n";
+  csv << std::setprecision(9);
+  for (const auto& e : map.experiences) {
+    csv << e.id << "," << e.x_m << "," << e.y_m << "," << e.theta_rad << ",";
+    const auto first = seen.experience_first_frame.find(e.id);
+    const FramePose* truth = nullptr;
+    if (first != seen.experience_first_frame.end()) {
+      csv << first->second;
+      const auto t = truth_at.find(first->second);
+      if (t != truth_at.end()) truth = t->second;
+    }
+    if (truth) csv << "," << truth->x << "," << truth->y << "," << truth->theta;
+    else csv << ",,,";
+    if (alignment) {
+      const double c = std::cos(alignment->rotation_rad), s = std::sin(alignment->rotation_rad), k = alignment->scale;
+      const double x = k * (c * e.x_m - s * e.y_m) + alignment->translation_x;
+      const double y = k * (s * e.x_m + c * e.y_m) + alignment->translation_y;
+      csv << "," << x << "," << y << ",";
+      if (truth) csv << std::hypot(x - truth->x, y - truth->y);
+    } else {
+      csv << ",,,";
+    }
+    csv << "\n";
+  }
+  if (!csv) throw std::runtime_error("cannot write " + path.string());
 }
 
 cv::Mat RenderExperienceMap(const sim::WorldMap& world, std::span<const FramePose> truth,

@@ -26,6 +26,14 @@ void WriteMapServerGrid(const msg::OccupancyGrid& grid, const std::filesystem::p
 cv::Mat RenderExperienceMap(const sim::WorldMap& world, std::span<const FramePose> truth,
                             const msg::ExperienceMap* map, const eval::TrajectoryError* alignment);
 
+// One row per experience of the final map: its id and pose in the map (as `rslam run`'s
+// experiences.csv), the frame it was first current and the true pose then (world), its pose moved
+// into the world by `alignment` (the ATE's similarity fit) and its distance from the truth there:
+// where the map is off, and by how much. Truth and aligned columns are empty where unknown. Throws
+// std::runtime_error when the file cannot be written.
+void WriteExperiencesCsv(const msg::ExperienceMap& map, const DemoObservations& seen,
+                         const eval::TrajectoryError* alignment, const std::filesystem::path& path);
+
 // The grid (map_server shades) cropped to its known part, with the map-frame path in red.
 cv::Mat RenderOccupancy(const msg::OccupancyGrid& grid, std::span<const FramePose> map_path);
 

@@ -60,7 +60,7 @@ void PrepareOutputDir(const fs::path& out) {
     for (const auto& entry : fs::directory_iterator(dir))
       if (entry.is_regular_file() && entry.path().extension() == ext) fs::remove(entry.path());
   for (const char* name : {"summary.json", "report.txt", "experience_map.png", "occupancy.png", "grid_errors.png", "grid.pgm",
-                           "grid.yaml", "recording.mcap", "trajectories.csv"}) {
+                           "grid.yaml", "recording.mcap", "trajectories.csv", "experiences.csv"}) {
     std::error_code ignored;
     fs::remove(out / name, ignored);
   }
@@ -326,6 +326,7 @@ int RunDemo(const DemoOptions& options) {
               RenderExperienceMap(world, seen.ground_truth, seen.map ? &*seen.map : nullptr,
                                   figures.ate ? &*figures.ate : nullptr));
   WriteTrajectoriesCsv(seen, figures.dead_reckoning, out / "trajectories.csv");
+  if (seen.map) WriteExperiencesCsv(*seen.map, seen, figures.ate ? &*figures.ate : nullptr, out / "experiences.csv");
   const uint64_t frames = seen.ground_truth.size();
   const uint32_t experiences = seen.map ? static_cast<uint32_t>(seen.map->experiences.size()) : seen.experience_count;
   const auto& ate = figures.ate;
@@ -384,7 +385,7 @@ int RunDemo(const DemoOptions& options) {
   for (const auto& n : notes) report << "note: " << n << "\n";
   report << "\nfiles: summary.json, report.txt, experience_map.png, occupancy.png, grid_errors.png, grid.pgm, grid.yaml, "
             "trajectories.csv"
-         << (record ? ", recording.mcap" : "") << ", logs/, state/\n";
+         << (seen.map ? ", experiences.csv" : "") << (record ? ", recording.mcap" : "") << ", logs/, state/\n";
   std::ofstream(out / "report.txt") << report.str();
   std::cout << "\n" << report.str();
   return 0;

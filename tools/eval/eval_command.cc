@@ -301,6 +301,7 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
       std::ofstream(dir / "summary.json") << json.dump(2) << "\n";
       cv::imwrite((dir / "experience_map.png").string(),
                   demo::RenderExperienceMap(world, r.seen.ground_truth, &*r.seen.map, figures.ate ? &*figures.ate : nullptr));
+      demo::WriteExperiencesCsv(*r.seen.map, r.seen, figures.ate ? &*figures.ate : nullptr, dir / "experiences.csv");
       cv::imwrite((dir / "grid_errors.png").string(),
                   demo::RenderGridComparison(world, reachable, figures.map_to_world.value_or(map_origin), *r.seen.grid,
                                              world.resolution()));

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <numbers>
 #include <string>
@@ -229,6 +230,26 @@ TEST_F(MapReplayTest, EvalMapReplaysARecordingAndJudgesItAsTheDemoDoes) {
   EXPECT_LT(json["ate_m"].get<double>(), 0.1);
   for (const char* file : {"summary.json", "experience_map.png", "grid_errors.png"})
     EXPECT_TRUE(std::filesystem::exists(dir_ / "out" / file)) << file;
+  {
+    // experiences.csv: a row per experience, each placed by the ATE's alignment; the RMS of their
+    // distances from the truth is the ATE.
+    std::ifstream csv(dir_ / "out" / "experiences.csv");
+    std::string line;
+    ASSERT_TRUE(std::getline(csv, line));
+    EXPECT_EQ(line, "id,x,y,theta,frame_seq,truth_x,truth_y,truth_theta,aligned_x,aligned_y,error_m");
+    size_t rows = 0, judged = 0;
+    double sum_sq = 0.0;
+    while (std::getline(csv, line)) {
+      ++rows;
+      const std::string error = line.substr(line.rfind(',') + 1);
+      if (error.empty()) continue;
+      ++judged;
+      sum_sq += std::stod(error) * std::stod(error);
+    }
+    EXPECT_EQ(rows, json["experiences"].get<size_t>());
+    ASSERT_GT(judged, 1u);
+    EXPECT_NEAR(std::sqrt(sum_sq / judged), json["ate_m"].get<double>(), 1e-6);
+  }
 
   const auto recorded = nlohmann::json::parse(RunRslam({"eval", "map", path, "--recorded-actions", "--json"}));
   EXPECT_EQ(recorded["actions"], "recorded");
