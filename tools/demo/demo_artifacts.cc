@@ -44,29 +44,23 @@ void WriteMapServerGrid(const msg::OccupancyGrid& grid, const std::filesystem::p
 
 void WriteExperiencesCsv(const msg::ExperienceMap& map, const DemoObservations& seen,
                          const eval::TrajectoryError* alignment, const std::filesystem::path& path) {
-  std::map<uint64_t, const FramePose*> truth_at;
-  for (const auto& t : seen.ground_truth) truth_at[t.frame_seq] = &t;
+  const std::map<uint32_t, Pose2D> truth_of = ExperienceGroundTruth(seen);
   std::ofstream csv(path);
   // The first four columns as `rslam run`'s experiences.csv.
   csv << "id,x,y,theta,frame_seq,truth_x,truth_y,truth_theta,aligned_x,aligned_y,error_m\n";
   csv << std::setprecision(9);
   for (const auto& e : map.experiences) {
     csv << e.id << "," << e.x_m << "," << e.y_m << "," << e.theta_rad << ",";
-    const auto first = seen.experience_first_frame.find(e.id);
-    const FramePose* truth = nullptr;
-    if (first != seen.experience_first_frame.end()) {
+    if (const auto first = seen.experience_first_frame.find(e.id); first != seen.experience_first_frame.end())
       csv << first->second;
-      const auto t = truth_at.find(first->second);
-      if (t != truth_at.end()) truth = t->second;
-    }
+    const auto truth_it = truth_of.find(e.id);
+    const Pose2D* truth = truth_it != truth_of.end() ? &truth_it->second : nullptr;
     if (truth) csv << "," << truth->x << "," << truth->y << "," << truth->theta;
     else csv << ",,,";
     if (alignment) {
-      const double c = std::cos(alignment->rotation_rad), s = std::sin(alignment->rotation_rad), k = alignment->scale;
-      const double x = k * (c * e.x_m - s * e.y_m) + alignment->translation_x;
-      const double y = k * (s * e.x_m + c * e.y_m) + alignment->translation_y;
-      csv << "," << x << "," << y << ",";
-      if (truth) csv << std::hypot(x - truth->x, y - truth->y);
+      const Eigen::Vector2d p = alignment->Align(e.x_m, e.y_m);
+      csv << "," << p.x() << "," << p.y() << ",";
+      if (truth) csv << std::hypot(p.x() - truth->x, p.y() - truth->y);
     } else {
       csv << ",,,";
     }
@@ -86,10 +80,9 @@ cv::Mat RenderExperienceMap(const sim::WorldMap& world, std::span<const FramePos
   std::vector<cv::Point2d> experiences;
   std::map<uint32_t, size_t> index;
   if (map != nullptr && alignment != nullptr) {
-    const double c = std::cos(alignment->rotation_rad), s = std::sin(alignment->rotation_rad), k = alignment->scale;
     for (const auto& e : map->experiences) {
-      const cv::Point2d w(k * (c * e.x_m - s * e.y_m) + alignment->translation_x,
-                          k * (s * e.x_m + c * e.y_m) + alignment->translation_y);
+      const Eigen::Vector2d p = alignment->Align(e.x_m, e.y_m);
+      const cv::Point2d w(p.x(), p.y());
       index[e.id] = experiences.size();
       experiences.push_back(w);
       extend(w.x, w.y);

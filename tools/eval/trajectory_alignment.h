@@ -9,6 +9,9 @@
 // 2012). When both poses of every pair carry a heading, the heading error after applying R is
 // reported too.
 
+#include <Eigen/Core>
+
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -36,6 +39,12 @@ struct TrajectoryError {
   double translation_x = 0.0;  // t
   double translation_y = 0.0;
   std::optional<double> heading_rms_rad;  // when every pair has both headings
+
+  // An estimate position moved by the alignment into the truth's frame: s R p + t.
+  Eigen::Vector2d Align(double x, double y) const {
+    const double c = std::cos(rotation_rad), s = std::sin(rotation_rad);
+    return {scale * (c * x - s * y) + translation_x, scale * (s * x + c * y) + translation_y};
+  }
 };
 
 inline constexpr Duration kDefaultMaxStampGap = std::chrono::milliseconds(10);
