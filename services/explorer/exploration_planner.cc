@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -188,7 +189,7 @@ void ExplorationPlanner::StartFinishing() {
   const int k = FinerPerCoarse();
   std::vector<SetAsideGoal> set_aside;
   for (const SetAsideGoal& g : set_aside_)
-    ForEachFinerCell(g.x, g.y, k, [&](int x, int y) { set_aside.push_back({x, y, g.reason, g.blocked}); });
+    ForEachFinerCell(g.x, g.y, k, [&](int x, int y) { set_aside.push_back({x, y, g.reason, g.blocked, g.looked}); });
   std::map<std::pair<int, int>, int> blocked;
   for (const auto& [cell, attempts] : blocked_attempts_)
     ForEachFinerCell(cell.first, cell.second, k, [&](int x, int y) { blocked[{x, y}] = attempts; });
@@ -374,6 +375,40 @@ bool ExplorationPlanner::AddUncertainFrontierGoals(const CoarseGrid& cs, std::ve
   return added;
 }
 
+bool ExplorationPlanner::AddLookGoals(const CoarseGrid& cs, const std::vector<uint8_t>& traversable,
+                                      std::vector<uint8_t>& goal, std::vector<int32_t>& look_target) const {
+  const int w = cs.width;
+  // No cell on the segment between the centres, the ends aside, holds an obstacle (quarter-cell steps).
+  const auto in_sight = [&](int x0, int y0, int x1, int y1) {
+    const int steps = 4 * std::max(std::abs(x1 - x0), std::abs(y1 - y0));
+    for (int k = 1; k < steps; ++k) {
+      const double t = static_cast<double>(k) / steps;
+      const int x = static_cast<int>(std::floor(x0 + 0.5 + t * (x1 - x0)));
+      const int y = static_cast<int>(std::floor(y0 + 0.5 + t * (y1 - y0)));
+      if ((x != x0 || y != y0) && (x != x1 || y != y1) && cs.obstacle[static_cast<size_t>(y) * w + x]) return false;
+    }
+    return true;
+  };
+  std::fill(goal.begin(), goal.end(), uint8_t{0});
+  std::fill(look_target.begin(), look_target.end(), -1);
+  bool added = false;
+  for (const SetAsideGoal& g : set_aside_) {
+    if (g.looked || !cs.Contains(g.x, g.y)) continue;
+    const size_t gi = static_cast<size_t>(g.y) * w + g.x;
+    if (cs.cells[gi] != CellClass::kUnknown && !cs.margin_goal[gi]) continue;
+    ForEachCellWithin(cs, g.x, g.y, config_.set_aside_look_max_m, [&](int x, int y) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      if (look_target[i] >= 0 || !traversable[i] || cs.cells[i] != CellClass::kFree ||
+          std::hypot(x - g.x, y - g.y) * cs.cell_size_m < config_.set_aside_look_min_m || !in_sight(x, y, g.x, g.y))
+        return;
+      goal[i] = 1;
+      look_target[i] = g.y * w + g.x;
+      added = true;
+    });
+  }
+  return added;
+}
+
 Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot) {
   if (!IsFinite(robot)) throw std::invalid_argument("robot pose is not finite");
   ExplorerConfig grid_config = config_;
@@ -450,6 +485,8 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   bool margin_goals_added = false;    // ... and to unknown space inside it
   bool uncertain_frontier_added = false;  // uncertain cells that border unknown space are goals
   bool returning = false;                 // the goal is where exploration began (return_to_start)
+  bool looking = false;                   // the goals are places to look at set-aside goals from
+  std::vector<int32_t> look_target(n, -1);  // AddLookGoals
   // An off-centre robot first steps to the centre of its cell, unless that step itself comes
   // closer to an obstacle than the robot already is (it stands off-centre beside a wall).
   const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
@@ -552,6 +589,11 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
         if (!finer.complete) finer.reason = "on the finer grid: " + finer.reason;
         return finer;
       }
+      // Still nothing: set-aside goals still unseen may be in view from afar (set_aside_looks).
+      if (!looking && looks_ < config_.set_aside_looks) {
+        looking = true;
+        if (AddLookGoals(cs, traversable, goal, look_target)) continue;
+      }
       if (config_.return_to_start && !returned_to_start_ && return_attempts_ < kMaxReturnsToStart) {
         ++return_attempts_;
         const int sx = cs.CellX(start_->x), sy = cs.CellY(start_->y);
@@ -597,14 +639,19 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
         if (best < 0) throw std::logic_error("exploration transform descent found no neighbour");
         x += kNeighbourDx[best];
         y += kNeighbourDy[best];
-        if (goal[static_cast<size_t>(y) * w + x]) { gx = x; gy = y; break; }
+        if (goal[static_cast<size_t>(y) * w + x]) {
+          gx = x;
+          gy = y;
+          if (looking) path.emplace_back(x, y);  // a free cell: the look is taken from it
+          break;
+        }
         path.emplace_back(x, y);
       }
     }
     plan.goal_x = gx;
     plan.goal_y = gy;
     plan.margin_goal = margin_goals_added && cs.margin_goal[static_cast<size_t>(gy) * w + gx];
-    if (path.size() == 1) {
+    if (path.size() == 1 && !looking) {
       if (returning) return look_here(plan, "back where exploration began: pirouette");
       // The unknown is here or next door: look, unless we already have.
       if (looked_here) {
@@ -643,18 +690,41 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       y = wy;
       theta = heading;
     }
+    // A look from afar ends facing the goal it is for, which is not counted against the place
+    // looked from if a move is refused. Each goal is looked at once.
+    if (looking) {
+      const int32_t t = look_target[static_cast<size_t>(gy) * w + gx];
+      const int tx = t % w, ty = t / w;
+      const double turn = WrapAngle(std::atan2(cs.CentreY(ty) - y, cs.CentreX(tx) - x) - theta);
+      if (std::abs(turn) > 1e-9) plan.commands.push_back({MotionCommand::Kind::kRotate, turn, 0.0, 0});
+      theta = WrapAngle(theta + turn);
+      for (SetAsideGoal& g : set_aside_)
+        if (g.x == tx && g.y == ty && !g.looked) g.looked = true, ++looks_;
+      plan.goal_x = plan.goal_y = -1;
+      plan.margin_goal = false;
+      char from_m[16];
+      std::snprintf(from_m, sizeof from_m, "%.1f", std::hypot(cs.CentreX(tx) - x, cs.CentreY(ty) - y));
+      plan.reason = "to look at set-aside goal cell (" + std::to_string(tx) + ", " + std::to_string(ty) + ") from " +
+                    from_m + " m, " + std::to_string(path.size() - 1) + " cells away" +
+                    (squeezing ? " through the margin" : "");
+      if (plan.commands.empty()) {  // already there, facing it: the next one, if any
+        AddLookGoals(cs, traversable, goal, look_target);
+        continue;
+      }
+    }
     // Without the closing pirouette the camera looks ahead on the way; unknown space it did not
     // see is next door at the next plan, which pirouettes there (the branch above).
-    if (config_.pirouette_at_goal || returning)
+    if ((config_.pirouette_at_goal && !looking) || returning)
       plan.commands.push_back({MotionCommand::Kind::kPirouette, 2.0 * M_PI / config_.pirouette_steps, 0.0,
                                config_.pirouette_steps});
     plan.has_target = true;
     plan.target = {x, y, theta};
-    plan.reason = std::string(returning                  ? "back to where exploration began, "
-                              : uncertain_frontier_added ? "to uncertain space bordering unknown, "
-                                                         : "to the nearest unknown space, ") +
-                  std::to_string(path.size() - 1) + " cells away" + (squeezing ? " through the margin" : "") +
-                  (returning ? ", to look all round there" : "");
+    if (!looking)
+      plan.reason = std::string(returning                  ? "back to where exploration began, "
+                                : uncertain_frontier_added ? "to uncertain space bordering unknown, "
+                                                           : "to the nearest unknown space, ") +
+                    std::to_string(path.size() - 1) + " cells away" + (squeezing ? " through the margin" : "") +
+                    (returning ? ", to look all round there" : "");
     // Look before you move, at planning time: a move of the plan that the caller's check would
     // refuse (the escape through the dilation margin, or the first step from an off-centre robot,
     // can pass closer to a wall than the robot radius) would count against goal after goal, each
@@ -722,6 +792,7 @@ proto::ExplorerState ExplorationPlanner::ToProto() const {
     out->mutable_cell()->set_y(g.y);
     out->set_reason(g.reason);
     out->set_blocked(g.blocked);
+    out->set_looked(g.looked);
   }
   for (const auto& [cell, attempts] : blocked_attempts_) {
     auto* out = state.add_blocked();
@@ -743,6 +814,7 @@ proto::ExplorerState ExplorationPlanner::ToProto() const {
   if (start_) SavePose(*start_, state.mutable_start());
   state.set_returned_to_start(returned_to_start_);
   state.set_return_attempts(return_attempts_);
+  state.set_set_aside_looks(looks_);
   if (cells_origin_) {
     state.mutable_cells_origin()->set_x(cells_origin_->first);
     state.mutable_cells_origin()->set_y(cells_origin_->second);
@@ -754,7 +826,8 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
   std::vector<SetAsideGoal> set_aside;
   std::map<std::pair<int, int>, int> blocked;
   // A kept cell may lie off the grid it was last on (a grid that shrank after a correction).
-  for (const auto& g : state.set_aside()) set_aside.push_back({g.cell().x(), g.cell().y(), g.reason(), g.blocked()});
+  for (const auto& g : state.set_aside())
+    set_aside.push_back({g.cell().x(), g.cell().y(), g.reason(), g.blocked(), g.looked()});
   for (const auto& b : state.blocked()) {
     if (b.attempts() < 0) throw std::invalid_argument("explorer state: negative refusal count");
     blocked[{b.cell().x(), b.cell().y()}] = b.attempts();
@@ -777,8 +850,8 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
     trail.push_back(LoadPose(p));
     if (!IsFinite(trail.back())) throw std::invalid_argument("explorer state: trail pose not finite");
   }
-  if (state.way_backs() < 0 || state.return_attempts() < 0)
-    throw std::invalid_argument("explorer state: negative way-back or return count");
+  if (state.way_backs() < 0 || state.return_attempts() < 0 || state.set_aside_looks() < 0)
+    throw std::invalid_argument("explorer state: negative way-back, return or look count");
   std::optional<Pose2D> start;
   if (state.has_start()) {
     start = LoadPose(state.start());
@@ -802,6 +875,7 @@ void ExplorationPlanner::LoadProto(const proto::ExplorerState& state) {
   start_ = start;
   returned_to_start_ = state.returned_to_start();
   return_attempts_ = state.return_attempts();
+  looks_ = state.set_aside_looks();
   cells_origin_ = cells_origin;
 }
 

@@ -15,7 +15,8 @@
 //     finishing_cell_factor, on which the planner then goes on to the end, still reaches unknown
 //     space; or unless return_to_start has not yet looked all round where exploration began (at
 //     most three plans back there: a grid that changes on the way, which blocks a move or shows
-//     unknown space again, interrupts one);
+//     unknown space again, interrupts one); or unless a set-aside goal still unseen can be looked
+//     at from afar (set_aside_looks: a plan to a free cell in plain sight of it, ending facing it);
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
 //     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees;
@@ -76,6 +77,7 @@ struct SetAsideGoal {
   int y = 0;
   std::string reason;
   bool blocked = false;  // set aside after refused moves (tried again, see blocked_goal_retries)
+  bool looked = false;   // looked at from afar since (set_aside_looks)
 };
 
 class ExplorationPlanner {
@@ -160,6 +162,12 @@ class ExplorationPlanner {
   // Marks as goals the uncertain cells that join unknown space through uncertain cells (not set
   // aside); true if there were any.
   bool AddUncertainFrontierGoals(const CoarseGrid& cs, std::vector<uint8_t>& goal) const;
+  // Makes the goals the free traversable cells set_aside_look_min_m..set_aside_look_max_m from a
+  // set-aside goal still unknown (or in the margin holding unknown space: margin_goals) and not
+  // yet looked at, in plain sight of it (no obstacle cell between the centres), and nothing else;
+  // look_target holds that goal's cell index for each (-1 elsewhere). True if there were any.
+  bool AddLookGoals(const CoarseGrid& cs, const std::vector<uint8_t>& traversable, std::vector<uint8_t>& goal,
+                    std::vector<int32_t>& look_target) const;
   // The straighten_paths shortcut of the header comment: the waypoints from `start` (where the
   // robot stands) that remain.
   std::vector<std::pair<double, double>> Straighten(const GridView& occupancy, const CoarseGrid& cs,
@@ -188,6 +196,7 @@ class ExplorationPlanner {
   std::optional<Pose2D> start_;      // the robot at the first PlanFrom
   bool returned_to_start_ = false;   // a pirouette within kAtStartM of it (return_to_start)
   int return_attempts_ = 0;          // plans back to it made
+  int looks_ = 0;                    // plans made to look at set-aside goals (set_aside_looks)
   CoarseGrid last_grid_;       // the last PlanFrom's (SetAsideAround)
   std::optional<std::pair<double, double>> cells_origin_;  // origin of the grid the kept cells are on
   std::pair<int, int> cells_shift_{0, 0};

@@ -61,6 +61,15 @@ struct ExplorerConfig {
   // corrected grid then shows unknown space again; at most three plans back are made (a grid that
   // changes on the way interrupts one). Off in the demo (tools/demo/MEASUREMENTS.md, session 41).
   bool return_to_start = false;
+  // When nothing is left to explore, look from afar at goals set aside whose cells are still
+  // unseen: drive to a free cell set_aside_look_min_m..set_aside_look_max_m from one, in plain
+  // sight of it, and turn to face it; each such goal once, at most this many plans in all (0 =
+  // off). A goal in the margin set aside after a bump at a wall's foot, or one a pirouette next
+  // door left unseen (the camera sees no floor closer than its blind range), is often in view
+  // from a metre off.
+  int set_aside_looks = 0;
+  double set_aside_look_min_m = 0.6;
+  double set_aside_look_max_m = 1.6;
 
   template <class V>
   void VisitFields(V& v) {
@@ -98,6 +107,10 @@ struct ExplorerConfig {
       "unknown occupancy cells needed to make a cell of that finer grid a goal");
     v("return_to_start", return_to_start,
       "when nothing is left to explore, drive back to where exploration began and pirouette there before completing");
+    v("set_aside_looks", set_aside_looks,
+      "when nothing is left to explore, plans that go and face a set-aside goal still unseen from afar (0 = off)");
+    v("set_aside_look_min_m", set_aside_look_min_m, "nearest such a look is taken from (m)");
+    v("set_aside_look_max_m", set_aside_look_max_m, "farthest such a look is taken from (m)");
   }
   void Validate() const {
     Require(std::isfinite(robot_radius_m) && robot_radius_m >= 0 && robot_radius_m < 10,
@@ -116,6 +129,12 @@ struct ExplorerConfig {
             "margin_goal_spare_m", "must be in [0, 10]");
     Require(way_back_moves >= 0 && way_back_moves <= 1000, "way_back_moves", "must be 0..1000");
     Require(finishing_min_unknown_cells >= 1, "finishing_min_unknown_cells", "must be >= 1");
+    Require(set_aside_looks >= 0 && set_aside_looks <= 1000, "set_aside_looks", "must be 0..1000");
+    Require(std::isfinite(set_aside_look_min_m) && set_aside_look_min_m >= 0, "set_aside_look_min_m",
+            "must be >= 0");
+    Require(std::isfinite(set_aside_look_max_m) && set_aside_look_max_m > set_aside_look_min_m &&
+                set_aside_look_max_m <= 10,
+            "set_aside_look_max_m", "must be greater than set_aside_look_min_m and at most 10");
   }
 };
 

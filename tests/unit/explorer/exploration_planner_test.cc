@@ -6,6 +6,8 @@
 #include <cmath>
 #include <optional>
 
+#include "common/math/angle.h"
+
 namespace rslam::explorer {
 namespace {
 
@@ -634,6 +636,91 @@ TEST(ExplorationPlannerTest, ReturnsOnceToWhereExplorationBeganBeforeCallingItCo
   EXPECT_THROW(restarted.LoadProto(bad), std::invalid_argument);
 }
 
+// A known room 3 m square with one cell that stays unknown (exploration cell (15, 15), centre
+// (1.55, 1.55)) and a wall at x = 1.1 m from the bottom to y = 2.25 m.
+TestGrid RoomWithAnUnseenCellBesideAWall() {
+  TestGrid grid(60, 60, 0);
+  grid.Set(30, 30, -1);
+  for (int y = 1; y < 45; ++y) grid.Set(22, y, 100);
+  return grid;
+}
+
+// Checks that `look` is a look at that cell from afar, from `from`.
+void ExpectALookAtTheUnseenCell(const ExplorationPlanner& planner, const TestGrid& grid, const Plan& look,
+                                const Pose2D& from) {
+  ASSERT_FALSE(look.complete) << look.reason;
+  EXPECT_NE(look.reason.find("to look at set-aside goal cell (15, 15)"), std::string::npos) << look.reason;
+  ASSERT_TRUE(look.has_target);
+  const double gx = 1.55, gy = 1.55;
+  const double range = std::hypot(gx - look.target.x, gy - look.target.y);
+  EXPECT_GE(range, planner.config().set_aside_look_min_m - 1e-9);
+  EXPECT_LE(range, planner.config().set_aside_look_max_m + 1e-9);
+  EXPECT_GT(look.target.x, 1.15) << "in sight of the goal, not behind the wall";
+  EXPECT_NEAR(WrapAngle(std::atan2(gy - look.target.y, gx - look.target.x) - look.target.theta), 0.0, 1e-9);
+  ASSERT_FALSE(look.commands.empty());
+  EXPECT_EQ(look.commands.back().kind, Kind::kRotate);
+  EXPECT_EQ(look.goal_x, -1) << "a refused move does not set the place looked from aside";
+  ExpectMovesClear(planner, grid.View(), look, from);
+}
+
+TEST(ExplorationPlannerTest, LooksAtASetAsideGoalFromAfarOnceBeforeCallingItComplete) {
+  const TestGrid grid = RoomWithAnUnseenCellBesideAWall();
+  const Pose2D start{1.5, 0.3, 0.0};
+  ExplorerConfig config = Config();
+  config.set_aside_looks = 3;
+  ExplorationPlanner off(Config()), planner(config);  // set_aside_looks 0 by default
+  const Plan to_cell = planner.PlanFrom(grid.View(), start);
+  ASSERT_TRUE(to_cell.has_target) << to_cell.reason;
+  // Looked at all round from next door and still unknown: set aside, and then looked at from afar.
+  ASSERT_FALSE(off.PlanFrom(grid.View(), start).complete);
+  off.RecordPirouette(to_cell.target);
+  EXPECT_TRUE(off.PlanFrom(grid.View(), to_cell.target).complete);
+  planner.RecordPirouette(to_cell.target);
+  const Plan look = planner.PlanFrom(grid.View(), to_cell.target);
+  ASSERT_EQ(planner.set_aside_goals().size(), 1u);
+  ExpectALookAtTheUnseenCell(planner, grid, look, to_cell.target);
+  // Still unseen after the look: not looked at again, across a restart too.
+  proto::ExplorerState saved = planner.ToProto();
+  ExplorationPlanner restarted(config);
+  restarted.LoadProto(saved);
+  EXPECT_TRUE(planner.PlanFrom(grid.View(), look.target).complete);
+  EXPECT_TRUE(restarted.PlanFrom(grid.View(), start).complete);
+  // From the far side of the wall the places in range there are out of the goal's sight: the
+  // look is taken from the goal's side.
+  saved.mutable_set_aside(0)->set_looked(false);
+  saved.set_set_aside_looks(0);
+  ExplorationPlanner behind_wall(config);
+  behind_wall.LoadProto(saved);
+  const Pose2D behind{0.5, 1.0, 0.0};
+  ExpectALookAtTheUnseenCell(behind_wall, grid, behind_wall.PlanFrom(grid.View(), behind), behind);
+  saved.set_set_aside_looks(-1);
+  EXPECT_THROW(restarted.LoadProto(saved), std::invalid_argument);
+}
+
+TEST(ExplorationPlannerTest, LooksFromAfarAtMostSetAsideLooksTimes) {
+  TestGrid grid = RoomWithAnUnseenCellBesideAWall();
+  grid.Set(50, 50, -1);  // a second unknown cell (exploration cell (25, 25))
+  const auto looks_until_complete = [&](int allowed) {
+    ExplorerConfig config = Config();
+    config.set_aside_looks = allowed;
+    ExplorationPlanner planner(config);
+    Pose2D at{1.5, 0.3, 0.0};
+    int looks = 0;
+    Plan plan = planner.PlanFrom(grid.View(), at);
+    for (int k = 0; k < 40 && !plan.complete; ++k, plan = planner.PlanFrom(grid.View(), at)) {
+      looks += plan.reason.find("to look at set-aside goal") != std::string::npos;
+      if (plan.commands.size() == 1 && plan.commands[0].kind == Kind::kPirouette) planner.RecordPirouette(at);
+      else at = plan.target;
+    }
+    EXPECT_TRUE(plan.complete) << plan.reason;
+    EXPECT_EQ(planner.set_aside_goals().size(), 2u);
+    return looks;
+  };
+  EXPECT_EQ(looks_until_complete(0), 0);
+  EXPECT_EQ(looks_until_complete(1), 1);
+  EXPECT_EQ(looks_until_complete(5), 2);  // each goal once
+}
+
 TEST(ExplorationPlannerTest, RejectsBadInput) {
   TestGrid grid(20, 20, 0);
   ExplorationPlanner planner(Config());
@@ -645,6 +732,14 @@ TEST(ExplorationPlannerTest, RejectsBadInput) {
   ExplorerConfig config;
   config.coarse_cell_factor = 0;
   EXPECT_THROW(ExplorationPlanner{config}, ConfigError);
+  config = ExplorerConfig{};
+  config.set_aside_look_max_m = config.set_aside_look_min_m;
+  try {
+    ExplorationPlanner{config};
+    ADD_FAILURE() << "a look range of zero width was taken";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("set_aside_look_max_m"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
@@ -864,6 +959,21 @@ TEST(ExplorationPlannerTest, LooksIntoUnknownSpaceTheMarginHidesBeforeCallingItC
       EXPECT_FALSE(g.blocked) << g.reason;
       EXPECT_NE(g.reason.find("refused"), std::string::npos) << g.reason;
     }
+  }
+  // With set_aside_looks, the refused gap is then looked at from the room, from afar.
+  {
+    ExplorerConfig looks = config;
+    looks.set_aside_looks = 2;
+    ExplorationPlanner refused(looks);
+    Plan p = refused.PlanFrom(grid.View(), robot);
+    for (int k = 0; k < 20 && p.margin_goal; ++k, p = refused.PlanFrom(grid.View(), robot)) refused.ReportBlocked(p);
+    ASSERT_FALSE(p.complete) << p.reason;
+    EXPECT_NE(p.reason.find("to look at set-aside goal cell (25, "), std::string::npos) << p.reason;
+    ASSERT_TRUE(p.has_target);
+    EXPECT_LT(p.target.x, 4.5);
+    EXPECT_NEAR(p.target.y, 1.4, 0.3);
+    EXPECT_LT(std::abs(p.target.theta), 0.5) << "facing the gap";
+    ExpectMovesClear(refused, grid.View(), p, robot);
   }
   // Looked at from next door and still unknown (a gap in a wall drawn with holes), each cell of
   // the margin holding unknown space is set aside in turn, and exploration ends.
