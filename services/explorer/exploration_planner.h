@@ -16,7 +16,8 @@
 //     space; or unless return_to_start has not yet looked all round where exploration began (at
 //     most three plans back there: a grid that changes on the way, which blocks a move or shows
 //     unknown space again, interrupts one); or unless a set-aside goal still unseen can be looked
-//     at from afar (set_aside_looks: a plan to a free cell in plain sight of it, ending facing it);
+//     at from afar (set_aside_looks: a plan over free cells to one in plain sight of it, ending
+//     facing it);
 //  3. descends the transform from the robot's cell to the last free cell before the nearest
 //     unknown, and turns that path into piece-wise linear motion (section 2.2): turn on the spot,
 //     move straight, with collinear steps merged, ending with a pirouette (12 x 30 degrees;

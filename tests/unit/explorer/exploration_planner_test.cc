@@ -693,6 +693,14 @@ TEST(ExplorationPlannerTest, LooksAtASetAsideGoalFromAfarOnceBeforeCallingItComp
   behind_wall.LoadProto(saved);
   const Pose2D behind{0.5, 1.0, 0.0};
   ExpectALookAtTheUnseenCell(behind_wall, grid, behind_wall.PlanFrom(grid.View(), behind), behind);
+  // Not through the margin, where the robot bumps and turns beside walls: with the wall drawn up to
+  // 0.1 m from the top one, the way round it is only through the margin, and there is no look.
+  TestGrid narrow = grid;
+  for (int y = 45; y < 56; ++y) narrow.Set(22, y, 100);
+  ExplorationPlanner beyond_the_margin(config);
+  beyond_the_margin.LoadProto(saved);
+  const Plan none = beyond_the_margin.PlanFrom(narrow.View(), behind);
+  EXPECT_TRUE(none.complete) << none.reason;
   saved.set_set_aside_looks(-1);
   EXPECT_THROW(restarted.LoadProto(saved), std::invalid_argument);
 }
