@@ -96,6 +96,20 @@ void ForEachCellWithin(const CoarseGrid& cs, int cx, int cy, double radius_m, F 
       if (cs.Contains(x, y) && std::hypot(x - cx, y - cy) * cs.cell_size_m <= radius_m) f(x, y);
 }
 
+// True when pred(x, y) holds for every cell of cs that the segment from a to b crosses (sampled
+// every quarter cell, both ends included).
+template <class F>
+bool EveryCellOnSegment(const CoarseGrid& cs, std::pair<double, double> a, std::pair<double, double> b, F pred) {
+  const double length = std::hypot(b.first - a.first, b.second - a.second);
+  const int samples = static_cast<int>(std::ceil(length / (0.25 * cs.cell_size_m)));
+  for (int k = 0; k <= samples; ++k) {
+    const double t = samples == 0 ? 0.0 : static_cast<double>(k) / samples;
+    if (!pred(cs.CellX(a.first + t * (b.first - a.first)), cs.CellY(a.second + t * (b.second - a.second))))
+      return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 ExplorationPlanner::ExplorationPlanner(ExplorerConfig config) : config_(std::move(config)) {
@@ -326,13 +340,11 @@ std::vector<std::pair<double, double>> ExplorationPlanner::Straighten(
     std::pair<double, double> start, const std::vector<std::pair<double, double>>& waypoints) const {
   // The straight move from a to b: every cell it crosses (sampled at a quarter cell) usable, and clear.
   const auto usable = [&](std::pair<double, double> a, std::pair<double, double> b) {
+    if (!EveryCellOnSegment(cs, a, b, [&](int x, int y) {
+          return cs.Contains(x, y) && traversable[static_cast<size_t>(y) * cs.width + x];
+        }))
+      return false;
     const double length = std::hypot(b.first - a.first, b.second - a.second);
-    const int samples = static_cast<int>(std::ceil(length / (0.25 * cs.cell_size_m)));
-    for (int k = 0; k <= samples; ++k) {
-      const double t = samples == 0 ? 0.0 : static_cast<double>(k) / samples;
-      const int x = cs.CellX(a.first + t * (b.first - a.first)), y = cs.CellY(a.second + t * (b.second - a.second));
-      if (!cs.Contains(x, y) || !traversable[static_cast<size_t>(y) * cs.width + x]) return false;
-    }
     const Pose2D from{a.first, a.second, std::atan2(b.second - a.second, b.first - a.first)};
     return IsPathClear(occupancy, from, length) && !PassesBlockingObstacle(from, length);
   };
@@ -378,19 +390,14 @@ bool ExplorationPlanner::AddUncertainFrontierGoals(const CoarseGrid& cs, std::ve
 bool ExplorationPlanner::AddLookGoals(const CoarseGrid& cs, const std::vector<uint8_t>& traversable,
                                       std::vector<uint8_t>& goal, std::vector<int32_t>& look_target) const {
   const int w = cs.width;
-  // No cell on the segment between the centres, the ends aside, holds an obstacle (quarter-cell steps).
+  // No cell on the segment between the centres, the ends aside, holds an obstacle.
   const auto in_sight = [&](int x0, int y0, int x1, int y1) {
-    const int steps = 4 * std::max(std::abs(x1 - x0), std::abs(y1 - y0));
-    for (int k = 1; k < steps; ++k) {
-      const double t = static_cast<double>(k) / steps;
-      const int x = static_cast<int>(std::floor(x0 + 0.5 + t * (x1 - x0)));
-      const int y = static_cast<int>(std::floor(y0 + 0.5 + t * (y1 - y0)));
-      if ((x != x0 || y != y0) && (x != x1 || y != y1) && cs.obstacle[static_cast<size_t>(y) * w + x]) return false;
-    }
-    return true;
+    return EveryCellOnSegment(cs, {cs.CentreX(x0), cs.CentreY(y0)}, {cs.CentreX(x1), cs.CentreY(y1)}, [&](int x, int y) {
+      return (x == x0 && y == y0) || (x == x1 && y == y1) || !cs.obstacle[static_cast<size_t>(y) * w + x];
+    });
   };
   std::fill(goal.begin(), goal.end(), uint8_t{0});
-  std::fill(look_target.begin(), look_target.end(), -1);
+  look_target.assign(cs.cells.size(), -1);
   bool added = false;
   for (const SetAsideGoal& g : set_aside_) {
     if (g.looked || !cs.Contains(g.x, g.y)) continue;
@@ -486,7 +493,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   bool uncertain_frontier_added = false;  // uncertain cells that border unknown space are goals
   bool returning = false;                 // the goal is where exploration began (return_to_start)
   bool looking = false;                   // the goals are places to look at set-aside goals from
-  std::vector<int32_t> look_target(n, -1);  // AddLookGoals
+  std::vector<int32_t> look_target;        // AddLookGoals
   // An off-centre robot first steps to the centre of its cell, unless that step itself comes
   // closer to an obstacle than the robot already is (it stands off-centre beside a wall).
   const double off_centre = std::hypot(robot.x - cs.CentreX(rx), robot.y - cs.CentreY(ry));
@@ -708,7 +715,6 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       for (SetAsideGoal& g : set_aside_)
         if (g.x == tx && g.y == ty && !g.looked) g.looked = true, ++looks_;
       plan.goal_x = plan.goal_y = -1;
-      plan.margin_goal = false;
       char from_m[16];
       std::snprintf(from_m, sizeof from_m, "%.1f", std::hypot(cs.CentreX(tx) - x, cs.CentreY(ty) - y));
       plan.reason = "to look at set-aside goal cell (" + std::to_string(tx) + ", " + std::to_string(ty) + ") from " +
