@@ -227,7 +227,12 @@ std::optional<RecognitionRefusal> ExperienceMap::RefusalOf(const ExperienceActio
   using Gate = RecognitionRefusal::Gate;
   const Experience& e = experiences_[a.experience_id];
   const Pose2D robot = RobotPose();
-  const bool takes_angle = a.kind == ExperienceAction::Kind::kLink || config_.exp_set_view_angle;
+  // A set while the pose cells are on a place the map refused is their step from it to a neighbour
+  // of it, not one along the map's stretch: a recognition of that neighbour, facing the view's angle
+  // as a link does (a link refused for its turn, then such a set moved the robot 7.9 m in a
+  // recorded run; tools/demo/MEASUREMENTS.md, session 63).
+  const bool takes_angle =
+      a.kind == ExperienceAction::Kind::kLink || config_.exp_set_view_angle || pose_cells_current_.has_value();
   if (config_.exp_recognition_max_turn_rad > 0 && takes_angle) {
     const double turn = std::abs(WrapAngle(e.th_rad + a.relative_angle_rad - robot.theta));
     if (turn > config_.exp_recognition_max_turn_rad)

@@ -943,16 +943,64 @@ TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
 
   // A set (a transition along a link) is turned only with exp_set_view_angle.
   map.Integrate(0.0, kPi, 1.0);  // facing -0.4 rad; experience 2 faces +y
-  map.Apply(LinkTo(Kind::kSet, 1, 2));
-  EXPECT_EQ(map.refused_recognitions(), 2u);
   config.exp_set_view_angle = false;
   ExperienceMap unturned(config);
   unturned.Load(map.Save());
-  unturned.Apply(LinkTo(Kind::kSet, 2, 2));
+  map.Apply(LinkTo(Kind::kSet, 1, 2));
+  EXPECT_EQ(map.refused_recognitions(), 2u);
+  unturned.Apply(LinkTo(Kind::kSet, 1, 2));
+  EXPECT_EQ(unturned.refused_recognitions(), 1u);
   EXPECT_EQ(unturned.current_id(), 2u);
   EXPECT_NEAR(unturned.RobotPose().theta, -0.4, 1e-9);
 
   ExpectKeysRefused(config, {{"exp_recognition_max_turn_rad", [](ExperienceMapConfig& c) { c.exp_recognition_max_turn_rad = 4; }}});
+}
+
+// After a refused recognition the pose cells go on from the refused place: their next set is to
+// a neighbour of it, which the map has not linked to its current experience. The turn gate holds
+// for it with the view's angle, as for the link before it.
+TEST(ExperienceMap, ASetAfterARefusedRecognitionFacesTheTurnGate) {
+  ExperienceMapConfig config = NoCorrection();  // the experiences stay where they were laid
+  config.exp_initial_em_deg = 0;
+  config.exp_recognition_max_turn_rad = 0.5;
+  config.exp_set_view_angle = false;  // a set keeps the map's facing, as in the demo
+  const auto drive = [](ExperienceMap& m) {
+    m.Apply(Create(0, kNoExperience));
+    m.Integrate(1.0, 0.0, 1.0);
+    m.Apply(Create(1, 0));  // at (1, 0) facing +x
+    m.Integrate(0.0, kPi / 2, 1.0);
+    m.Integrate(1.0, 0.0, 1.0);
+    m.Apply(Create(2, 1));  // at (1, 1) facing +y
+    m.Integrate(0.0, kPi / 2, 1.0);
+    m.Integrate(1.0, 0.0, 1.0);  // at (0, 1) facing -x
+  };
+  ExperienceMap map(config);
+  drive(map);
+  map.Apply(LinkTo(Kind::kLink, 2, 0));  // a half turn: refused
+  ASSERT_EQ(map.pose_cells_current(), std::optional<uint32_t>(0));
+
+  // The pose cells step from 0 to 1, seen as made (facing +x): refused too, the robot where it was.
+  map.Apply(LinkTo(Kind::kSet, 0, 1));
+  EXPECT_EQ(map.refused_recognitions(), 2u);
+  ExpectRefusal(map, RecognitionRefusal::Gate::kTurn, kPi, 0.5, "exp_recognition_max_turn_rad");
+  EXPECT_EQ(map.current_id(), 2u);
+  EXPECT_EQ(map.pose_cells_current(), std::optional<uint32_t>(1));
+  EXPECT_NEAR(map.RobotPose().x, 0.0, 1e-9);
+  EXPECT_NEAR(map.RobotPose().y, 1.0, 1e-9);
+
+  // Seen at a relative angle within 0.5 rad of the robot's facing: taken, the robot on 1.
+  ExperienceAction facing = LinkTo(Kind::kSet, 1, 0);
+  facing.relative_angle_rad = kPi - 0.4;
+  map.Apply(facing);
+  EXPECT_EQ(map.refused_recognitions(), 2u);
+  EXPECT_EQ(map.current_id(), 0u);
+  EXPECT_FALSE(map.pose_cells_current().has_value());
+
+  // With the map's and the pose cells' current experience the same, a set is not turn-gated
+  // (exp_set_view_angle off): a step to 1, whatever the view's angle.
+  map.Apply(LinkTo(Kind::kSet, 0, 1));
+  EXPECT_EQ(map.refused_recognitions(), 2u);
+  EXPECT_EQ(map.current_id(), 1u);
 }
 
 TEST(ExperienceMap, ARecognitionWhoseLinkWouldJoinPlacesFarApartIsRefused) {
