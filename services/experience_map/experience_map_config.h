@@ -71,10 +71,11 @@ struct ExperienceMapConfig {
   // the map, corrected at every recognition, knows the robot to within its drift since the last.
   // 0: every recognition is taken. Likewise one whose facing (the experience's plus the view's
   // relative angle; a kSet's only with exp_set_view_angle or after a refused recognition) is more
-  // than exp_recognition_max_turn_rad from the robot's (0: any). Likewise a kLink whose link would be longer than
-  // exp_recognition_max_link_m (0: any): a link that long joins two places, not one seen again
-  // (the map measures such a link within 0.03-0.04 m of the truth in nine of ten; its two wrong
-  // ones in 67 replayed runs were 0.81 and 1.04 m long, tools/demo/MEASUREMENTS.md session 48).
+  // than exp_recognition_max_turn_rad from the robot's (0: any). Likewise a kLink whose link would
+  // be longer than exp_recognition_max_link_m (0: any): a link that long joins two places, not one
+  // seen again (the map measures such a link within 0.03-0.04 m of the truth in nine of ten; its
+  // two wrong ones in 67 replayed runs were 0.81 and 1.04 m long, tools/demo/MEASUREMENTS.md
+  // session 48).
   // A recognition of an experience within exp_recognition_jump_local_ids ids of the current one
   // (the stretch the robot is on, seen again a step back or ahead) says nothing of the drift, so
   // it does not restart the distance the jump gate grows with (0: every recognition taken does).

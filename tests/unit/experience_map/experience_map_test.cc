@@ -964,18 +964,15 @@ TEST(ExperienceMap, ASetAfterARefusedRecognitionFacesTheTurnGate) {
   config.exp_initial_em_deg = 0;
   config.exp_recognition_max_turn_rad = 0.5;
   config.exp_set_view_angle = false;  // a set keeps the map's facing, as in the demo
-  const auto drive = [](ExperienceMap& m) {
-    m.Apply(Create(0, kNoExperience));
-    m.Integrate(1.0, 0.0, 1.0);
-    m.Apply(Create(1, 0));  // at (1, 0) facing +x
-    m.Integrate(0.0, kPi / 2, 1.0);
-    m.Integrate(1.0, 0.0, 1.0);
-    m.Apply(Create(2, 1));  // at (1, 1) facing +y
-    m.Integrate(0.0, kPi / 2, 1.0);
-    m.Integrate(1.0, 0.0, 1.0);  // at (0, 1) facing -x
-  };
   ExperienceMap map(config);
-  drive(map);
+  map.Apply(Create(0, kNoExperience));
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(1, 0));  // at (1, 0) facing +x
+  map.Integrate(0.0, kPi / 2, 1.0);
+  map.Integrate(1.0, 0.0, 1.0);
+  map.Apply(Create(2, 1));  // at (1, 1) facing +y
+  map.Integrate(0.0, kPi / 2, 1.0);
+  map.Integrate(1.0, 0.0, 1.0);  // at (0, 1) facing -x
   map.Apply(LinkTo(Kind::kLink, 2, 0));  // a half turn: refused
   ASSERT_EQ(map.pose_cells_current(), std::optional<uint32_t>(0));
 
@@ -988,7 +985,7 @@ TEST(ExperienceMap, ASetAfterARefusedRecognitionFacesTheTurnGate) {
   EXPECT_NEAR(map.RobotPose().x, 0.0, 1e-9);
   EXPECT_NEAR(map.RobotPose().y, 1.0, 1e-9);
 
-  // Seen at a relative angle within 0.5 rad of the robot's facing: taken, the robot on 1.
+  // A step back to 0 seen at a relative angle within 0.5 rad of the robot's facing: taken.
   ExperienceAction facing = LinkTo(Kind::kSet, 1, 0);
   facing.relative_angle_rad = kPi - 0.4;
   map.Apply(facing);
