@@ -910,19 +910,31 @@ TEST(ExperienceMap, ARecognitionOfTheStretchTheRobotIsOnDoesNotRestartTheJumpGat
                              [](ExperienceMapConfig& c) { c.exp_recognition_jump_local_ids = -1; }}});
 }
 
-TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
-  ExperienceMapConfig config = NoCorrection();  // the experiences stay where they were laid
+// The experiences stay where they were laid; a recognition that would turn the robot more than
+// 0.5 rad is refused.
+ExperienceMapConfig TurnGated() {
+  ExperienceMapConfig config = NoCorrection();
   config.exp_initial_em_deg = 0;
   config.exp_recognition_max_turn_rad = 0.5;
-  ExperienceMap map(config);
-  map.Apply(Create(0, kNoExperience));
+  return config;
+}
+
+// Three experiences on three sides of a unit square, the robot left at (0, 1) facing -x.
+void DriveThreeSides(ExperienceMap& map) {
+  map.Apply(Create(0, kNoExperience));  // at (0, 0) facing +x
   map.Integrate(1.0, 0.0, 1.0);
-  map.Apply(Create(1, 0));
+  map.Apply(Create(1, 0));  // at (1, 0) facing +x
   map.Integrate(0.0, kPi / 2, 1.0);
   map.Integrate(1.0, 0.0, 1.0);
   map.Apply(Create(2, 1));  // at (1, 1) facing +y
   map.Integrate(0.0, kPi / 2, 1.0);
   map.Integrate(1.0, 0.0, 1.0);  // at (0, 1) facing -x
+}
+
+TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
+  ExperienceMapConfig config = TurnGated();
+  ExperienceMap map(config);
+  DriveThreeSides(map);
 
   // Experience 0 seen facing as it was made (+x): a half turn from the robot's facing. Refused,
   // the robot's pose unchanged.
@@ -960,19 +972,10 @@ TEST(ExperienceMap, ARecognitionThatWouldTurnTheRobotFarIsRefused) {
 // a neighbour of it, which the map has not linked to its current experience. The turn gate holds
 // for it with the view's angle, as for the link before it.
 TEST(ExperienceMap, ASetAfterARefusedRecognitionFacesTheTurnGate) {
-  ExperienceMapConfig config = NoCorrection();  // the experiences stay where they were laid
-  config.exp_initial_em_deg = 0;
-  config.exp_recognition_max_turn_rad = 0.5;
+  ExperienceMapConfig config = TurnGated();
   config.exp_set_view_angle = false;  // a set keeps the map's facing, as in the demo
   ExperienceMap map(config);
-  map.Apply(Create(0, kNoExperience));
-  map.Integrate(1.0, 0.0, 1.0);
-  map.Apply(Create(1, 0));  // at (1, 0) facing +x
-  map.Integrate(0.0, kPi / 2, 1.0);
-  map.Integrate(1.0, 0.0, 1.0);
-  map.Apply(Create(2, 1));  // at (1, 1) facing +y
-  map.Integrate(0.0, kPi / 2, 1.0);
-  map.Integrate(1.0, 0.0, 1.0);  // at (0, 1) facing -x
+  DriveThreeSides(map);
   map.Apply(LinkTo(Kind::kLink, 2, 0));  // a half turn: refused
   ASSERT_EQ(map.pose_cells_current(), std::optional<uint32_t>(0));
 
