@@ -501,8 +501,20 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   const bool centre_step = off_centre > 0.25 * cs.cell_size_m;
   const bool centre_step_clear = !centre_step || (IsPathClear(occupancy, to_centre, off_centre) &&
                                                   !PassesBlockingObstacle(to_centre, off_centre));
+  // Once squeezing, a step into or out of the margin costs margin_step_cost times a step over free
+  // cells (step_factor; 1 where the wave may go and is no margin, 0 where it may not).
+  std::vector<uint8_t> margin(n, 0), step_factor;
+  const bool weigh_margin = config_.margin_step_cost > 1;
   while (true) {
-    const std::vector<int32_t> cost = ComputeExplorationTransform(cs.width, cs.height, traversable, goal);
+    const bool weighed = weigh_margin && squeezing;
+    if (weighed) {
+      step_factor.assign(n, 0);
+      for (size_t i = 0; i < n; ++i)
+        if (traversable[i] || goal[i]) step_factor[i] = margin[i] ? static_cast<uint8_t>(config_.margin_step_cost) : 1;
+    }
+    const std::vector<int32_t> cost = weighed
+                                          ? ComputeWeightedExplorationTransform(cs.width, cs.height, step_factor, goal)
+                                          : ComputeExplorationTransform(cs.width, cs.height, traversable, goal);
     Plan plan;
     // A robot inside the dilation margin (after a pirouette beside a wall, or when the grid has
     // just marked an obstacle next to it), or whose step to its cell's centre is refused, first
@@ -566,6 +578,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
         squeezing = true;
         for (size_t i = 0; i < n; ++i) {
           if (cs.cells[i] != CellClass::kOccupied || cs.obstacle[i] || cs.unseen[i]) continue;
+          margin[i] = 1;
           traversable_without_keep_off[i] = 1;
           if (!near_blocking[i]) traversable[i] = 1;
         }
@@ -647,7 +660,10 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
           if (diagonal && !(open(nx, y) && open(x, ny))) continue;
           const int32_t c = cost[static_cast<size_t>(ny) * w + nx];
           if (c == kUnreachable) continue;
-          const int64_t total = int64_t{c} + (diagonal ? kDiagonalStepCost : kStraightStepCost);
+          const int64_t factor =
+              weighed ? std::max(step_factor[static_cast<size_t>(y) * w + x], step_factor[static_cast<size_t>(ny) * w + nx])
+                      : 1;
+          const int64_t total = int64_t{c} + (diagonal ? kDiagonalStepCost : kStraightStepCost) * factor;
           if (total < best_cost) { best_cost = total; best = k; }
         }
         if (best < 0) throw std::logic_error("exploration transform descent found no neighbour");
@@ -687,7 +703,16 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
                             path[i + 1].second - path[i].second != path[i].second - path[i - 1].second;
       if (run_ends) waypoints.emplace_back(cs.CentreX(path[i].first), cs.CentreY(path[i].second));
     }
-    if (config_.straighten_paths) waypoints = Straighten(occupancy, cs, traversable, {robot.x, robot.y}, waypoints);
+    if (config_.straighten_paths) {
+      if (weighed) {  // a straight move may cross the margin only where the path does
+        std::vector<uint8_t> usable = traversable;
+        for (size_t i = 0; i < n; ++i) usable[i] = usable[i] && !margin[i];
+        for (const auto& [px, py] : path) usable[static_cast<size_t>(py) * w + px] = 1;
+        waypoints = Straighten(occupancy, cs, usable, {robot.x, robot.y}, waypoints);
+      } else {
+        waypoints = Straighten(occupancy, cs, traversable, {robot.x, robot.y}, waypoints);
+      }
+    }
     double x = robot.x, y = robot.y, theta = robot.theta;
     std::optional<std::pair<double, double>> blocked;  // on a move of this plan
     std::pair<double, double> closest;                  // the point of that move closest to it

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <functional>
+#include <queue>
+#include <utility>
 #include <stdexcept>
 
 namespace rslam::explorer {
@@ -141,6 +144,49 @@ std::vector<int32_t> ComputeExplorationTransform(int width, int height, std::spa
   }
   result.resize(n);
   return result;
+}
+
+std::vector<int32_t> ComputeWeightedExplorationTransform(int width, int height, std::span<const uint8_t> step_factor,
+                                                         std::span<const uint8_t> goal) {
+  if (width <= 0 || height <= 0) throw std::invalid_argument("exploration grid has no cells");
+  constexpr int64_t kMaxStepCost = int64_t{kDiagonalStepCost} * 255;
+  if (int64_t{width} * height > kUnreachable / kMaxStepCost)
+    throw std::invalid_argument("exploration grid is too large for 32-bit costs");
+  const size_t n = static_cast<size_t>(width) * height;
+  if (step_factor.size() != n || goal.size() != n)
+    throw std::invalid_argument("exploration grid masks do not match width x height");
+  const auto factor = [&](size_t i) -> int32_t { return goal[i] ? std::max<int32_t>(1, step_factor[i]) : step_factor[i]; };
+  std::vector<int32_t> cost(n, kUnreachable);
+  using Entry = std::pair<int32_t, int32_t>;  // cost, cell
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
+  for (size_t i = 0; i < n; ++i)
+    if (goal[i]) {
+      cost[i] = 0;
+      queue.push({0, static_cast<int32_t>(i)});
+    }
+  while (!queue.empty()) {
+    const auto [from, i] = queue.top();
+    queue.pop();
+    if (from != cost[static_cast<size_t>(i)]) continue;  // lowered again since it was queued
+    const int x = i % width, y = i / width;
+    const int32_t f = factor(static_cast<size_t>(i));
+    const auto open = [&](int cx, int cy) { return factor(static_cast<size_t>(cy) * width + cx) > 0; };
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = x + dx, ny = y + dy;
+        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+        const size_t j = static_cast<size_t>(ny) * width + nx;
+        if (goal[j] || step_factor[j] == 0) continue;  // sources, and cells the wave may not enter
+        const bool diagonal = dx != 0 && dy != 0;
+        if (diagonal && !(open(nx, y) && open(x, ny))) continue;  // never cut a corner
+        const int32_t c = from + (diagonal ? kDiagonalStepCost : kStraightStepCost) * std::max(f, factor(j));
+        if (c < cost[j]) {
+          cost[j] = c;
+          queue.push({c, static_cast<int32_t>(j)});
+        }
+      }
+  }
+  return cost;
 }
 
 }  // namespace rslam::explorer

@@ -27,4 +27,14 @@ std::vector<int32_t> ComputeExplorationTransform(int width, int height,
                                                  std::span<const uint8_t> traversable,
                                                  std::span<const uint8_t> goal);
 
+// The same with steps of unequal cost: a step costs its chamfer cost times the larger
+// step_factor of the two cells it joins (a goal cell's factor counts as at least 1), and
+// step_factor[i] == 0 keeps the wave out of cell i as traversable[i] == 0 does above. With every
+// open cell's factor 1 it equals ComputeExplorationTransform. The explorer weighs the dilation
+// margin so when it plans through it (ExplorerConfig::margin_step_cost); that is rare, so this is
+// plain Dijkstra on a binary heap, not the bucket queue above. Throws as above.
+std::vector<int32_t> ComputeWeightedExplorationTransform(int width, int height,
+                                                         std::span<const uint8_t> step_factor,
+                                                         std::span<const uint8_t> goal);
+
 }  // namespace rslam::explorer

@@ -914,6 +914,57 @@ TEST(ExplorationPlannerTest, ARefusalOnTheWayThroughTheMarginIsLookedAtBeforeCal
   EXPECT_TRUE(planner.PlanFrom(grid.View(), robot).complete);
 }
 
+// 10 m x 3 m, 5 cm cells: a known room, a wall at x = 7.5 m with a 60 cm door at its south end
+// (the demo world's passage south of the room opens beside a wall), unknown space beyond.
+TestGrid RoomWithADoorBesideTheSouthWall() {
+  TestGrid grid(200, 60, 0);
+  for (int y = 0; y < 60; ++y)
+    if (y > 12) grid.Set(150, y, 100);
+  for (int y = 1; y < 59; ++y)
+    for (int x = 151; x < 199; ++x) grid.Set(x, y, y <= 12 && x < 160 ? 0 : -1);  // floor seen through the door
+  return grid;
+}
+
+TEST(ExplorationPlannerTest, ADearerMarginKeepsASqueezeOffTheWallUntilTheDoor) {
+  // The door needs a plan through the margin (margin_step_cost).
+  const TestGrid grid = RoomWithADoorBesideTheSouthWall();
+  const Pose2D robot{0.5, 0.5, 0.0};
+  // The nearest the plan's moves come to the south wall (y = 0.05 m) before x = 6.5 m.
+  const auto nearest_to_wall = [&](const Plan& plan) {
+    double nearest = 1e9;
+    Pose2D at = robot;
+    for (const MotionCommand& c : plan.commands) {
+      if (c.kind == Kind::kRotate) at.theta += c.angle_rad;
+      if (c.kind != Kind::kMove) continue;
+      for (double s = 0; s <= c.distance_m; s += 0.01) {
+        const double x = at.x + s * std::cos(at.theta), y = at.y + s * std::sin(at.theta);
+        if (x < 6.5) nearest = std::min(nearest, y - 0.05);
+      }
+      at.x += c.distance_m * std::cos(at.theta);
+      at.y += c.distance_m * std::sin(at.theta);
+    }
+    return nearest;
+  };
+  ExplorerConfig config = Config();  // the demo's robot radius and exploration cells
+  config.robot_radius_m = 0.2;
+  config.coarse_cell_factor = 4;
+  std::vector<double> nearest;
+  for (const int step_cost : {1, 4}) {
+    config.margin_step_cost = step_cost;
+    ExplorationPlanner planner(config);
+    const Plan plan = planner.PlanFrom(grid.View(), robot);
+    ASSERT_FALSE(plan.complete) << plan.reason;
+    EXPECT_NE(plan.reason.find("through the margin"), std::string::npos) << plan.reason;
+    EXPECT_GT(plan.target.x, 7.0) << plan.reason;
+    ExpectMovesClear(planner, grid.View(), plan, robot);
+    nearest.push_back(nearest_to_wall(plan));
+  }
+  // At 1 the squeeze is one 7.2 m move closing on the wall (0.28 m at 6.5 m, as a demo run's
+  // 2.2 m move did before its bump); dearer, it keeps the robot's 0.45 m until the door.
+  EXPECT_LT(nearest[0], 0.3);
+  EXPECT_GE(nearest[1], 0.45 - 1e-9);
+}
+
 // 6 m x 3 m, 5 cm cells: a known room, a wall at x = 5 m with a 75 cm gap (cells y 21..35, a
 // round table's opening in the demo world), unknown space beyond it but for the gap itself and
 // the column just past it. With a 20 cm robot radius (25 cm margins) the gap keeps a band of

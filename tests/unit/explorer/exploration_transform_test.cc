@@ -2,17 +2,21 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 namespace rslam::explorer {
 namespace {
 
-// The oracle: relax every edge until nothing changes (Bellman-Ford), same moves and costs.
+// The oracle: relax every edge until nothing changes (Bellman-Ford), same moves and costs; trav
+// holds step factors (a step costs 10 or 14 times the larger factor of its two cells, a goal's at
+// least 1), so 0/1 masks give the unweighted transform.
 std::vector<int32_t> BruteForce(int w, int h, const std::vector<uint8_t>& trav, const std::vector<uint8_t>& goal) {
   std::vector<int64_t> d(w * h, INT64_MAX);
   for (int i = 0; i < w * h; ++i)
     if (goal[i]) d[i] = 0;
   auto open = [&](int x, int y) { return trav[y * w + x] || goal[y * w + x]; };
+  auto factor = [&](int x, int y) { return std::max<int64_t>(trav[y * w + x], goal[y * w + x] ? 1 : 0); };
   for (bool changed = true; changed;) {
     changed = false;
     for (int y = 0; y < h; ++y)
@@ -26,7 +30,7 @@ std::vector<int32_t> BruteForce(int w, int h, const std::vector<uint8_t>& trav, 
             const bool diag = dx && dy;
             // Moving from (nx, ny) into (x, y) passes between (x, ny) and (nx, y).
             if (diag && !(open(x, ny) && open(nx, y))) continue;
-            const int64_t c = d[ny * w + nx] + (diag ? 14 : 10);
+            const int64_t c = d[ny * w + nx] + (diag ? 14 : 10) * std::max(factor(x, y), factor(nx, ny));
             if (c < d[y * w + x]) { d[y * w + x] = c; changed = true; }
           }
       }
@@ -95,6 +99,40 @@ TEST(ExplorationTransformTest, RoutesAroundAWallInsteadOfThroughIt) {
   EXPECT_GT(cost[2 * w + 0], 80);
   EXPECT_EQ(cost[2 * w + 0], BruteForce(w, h, trav, goal)[2 * w + 0]);
   EXPECT_EQ(cost[0 * w + 4], kUnreachable);  // a wall cell
+}
+
+TEST(WeightedExplorationTransformTest, EqualsBruteForceOnRandomGridsAndTheUnweightedOneWithFactorsOfOne) {
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int w = 5 + trial * 2, h = 4 + trial;
+    std::vector<uint8_t> mask(w * h), factors(w * h), goal(w * h);
+    std::bernoulli_distribution blocked(0.3), is_goal(0.03), heavy(0.3);
+    std::uniform_int_distribution<int> weight(2, 9);
+    for (int i = 0; i < w * h; ++i) {
+      goal[i] = is_goal(rng);
+      mask[i] = !goal[i] && !blocked(rng);
+      factors[i] = mask[i] && heavy(rng) ? static_cast<uint8_t>(weight(rng)) : mask[i];
+    }
+    EXPECT_EQ(ComputeWeightedExplorationTransform(w, h, mask, goal), ComputeExplorationTransform(w, h, mask, goal))
+        << "trial " << trial;
+    EXPECT_EQ(ComputeWeightedExplorationTransform(w, h, factors, goal), BruteForce(w, h, factors, goal))
+        << "trial " << trial;
+  }
+}
+
+TEST(WeightedExplorationTransformTest, GoesRoundAHeavyBandWhenThatIsCheaper) {
+  // 9 x 5, goal at (8, 2), a band of factor-3 cells at x = 4 except at y = 4: straight across
+  // costs 120 (the two steps into and out of the band 30 each), round through (4, 4) 96.
+  const int w = 9, h = 5;
+  std::vector<uint8_t> factors(w * h, 1), goal(w * h, 0);
+  goal[2 * w + 8] = 1;
+  for (int y = 0; y < 4; ++y) factors[y * w + 4] = 3;
+  const auto cost = ComputeWeightedExplorationTransform(w, h, factors, goal);
+  EXPECT_EQ(cost[2 * w + 0], BruteForce(w, h, factors, goal)[2 * w + 0]);
+  EXPECT_EQ(cost[2 * w + 0], 96);
+  factors[4 * w + 4] = 3;  // the whole band heavy: straight across is cheapest
+  EXPECT_EQ(ComputeWeightedExplorationTransform(w, h, factors, goal)[2 * w + 0], 120);
+  EXPECT_THROW(ComputeWeightedExplorationTransform(w, h - 1, factors, goal), std::invalid_argument);
 }
 
 TEST(ExplorationTransformTest, NoGoalsMeansNothingIsReachable) {
