@@ -704,14 +704,12 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       if (run_ends) waypoints.emplace_back(cs.CentreX(path[i].first), cs.CentreY(path[i].second));
     }
     if (config_.straighten_paths) {
-      if (weighed) {  // a straight move may cross the margin only where the path does
-        std::vector<uint8_t> usable = traversable;
+      std::vector<uint8_t> usable = traversable;
+      if (weighed) {  // a straight move crosses the margin only where the path does
         for (size_t i = 0; i < n; ++i) usable[i] = usable[i] && !margin[i];
         for (const auto& [px, py] : path) usable[static_cast<size_t>(py) * w + px] = 1;
-        waypoints = Straighten(occupancy, cs, usable, {robot.x, robot.y}, waypoints);
-      } else {
-        waypoints = Straighten(occupancy, cs, traversable, {robot.x, robot.y}, waypoints);
       }
+      waypoints = Straighten(occupancy, cs, usable, {robot.x, robot.y}, waypoints);
     }
     double x = robot.x, y = robot.y, theta = robot.theta;
     std::optional<std::pair<double, double>> blocked;  // on a move of this plan
