@@ -660,9 +660,9 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
           if (diagonal && !(open(nx, y) && open(x, ny))) continue;
           const int32_t c = cost[static_cast<size_t>(ny) * w + nx];
           if (c == kUnreachable) continue;
-          const int64_t factor =
-              weighed ? std::max(step_factor[static_cast<size_t>(y) * w + x], step_factor[static_cast<size_t>(ny) * w + nx])
-                      : 1;
+          const int64_t factor = weighed ? std::max(step_factor[static_cast<size_t>(y) * w + x],
+                                                    step_factor[static_cast<size_t>(ny) * w + nx])
+                                         : 1;
           const int64_t total = int64_t{c} + (diagonal ? kDiagonalStepCost : kStraightStepCost) * factor;
           if (total < best_cost) { best_cost = total; best = k; }
         }

@@ -4,8 +4,8 @@
 #include <array>
 #include <functional>
 #include <queue>
-#include <utility>
 #include <stdexcept>
+#include <utility>
 
 namespace rslam::explorer {
 namespace {
@@ -149,13 +149,17 @@ std::vector<int32_t> ComputeExplorationTransform(int width, int height, std::spa
 std::vector<int32_t> ComputeWeightedExplorationTransform(int width, int height, std::span<const uint8_t> step_factor,
                                                          std::span<const uint8_t> goal) {
   if (width <= 0 || height <= 0) throw std::invalid_argument("exploration grid has no cells");
-  constexpr int64_t kMaxStepCost = int64_t{kDiagonalStepCost} * 255;
-  if (int64_t{width} * height > kUnreachable / kMaxStepCost)
-    throw std::invalid_argument("exploration grid is too large for 32-bit costs");
   const size_t n = static_cast<size_t>(width) * height;
   if (step_factor.size() != n || goal.size() != n)
     throw std::invalid_argument("exploration grid masks do not match width x height");
-  const auto factor = [&](size_t i) -> int32_t { return goal[i] ? std::max<int32_t>(1, step_factor[i]) : step_factor[i]; };
+  // A path visits each cell at most once, so no cost exceeds the dearest step per cell.
+  const int64_t max_step_cost =
+      int64_t{kDiagonalStepCost} * std::max<uint8_t>(1, *std::ranges::max_element(step_factor));
+  if (static_cast<int64_t>(n) > kUnreachable / max_step_cost)
+    throw std::invalid_argument("exploration grid is too large for 32-bit costs");
+  const auto factor = [&](size_t i) -> int32_t {
+    return goal[i] ? std::max<int32_t>(1, step_factor[i]) : step_factor[i];
+  };
   std::vector<int32_t> cost(n, kUnreachable);
   using Entry = std::pair<int32_t, int32_t>;  // cost, cell
   std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;

@@ -135,6 +135,16 @@ TEST(WeightedExplorationTransformTest, GoesRoundAHeavyBandWhenThatIsCheaper) {
   EXPECT_THROW(ComputeWeightedExplorationTransform(w, h - 1, factors, goal), std::invalid_argument);
 }
 
+TEST(WeightedExplorationTransformTest, RefusesAGridOnlyWhenItsDearestStepCouldOverflow) {
+  // 700,000 cells: costs fit at factor 1 (14 a step), not at 255 (2^31 / (14 x 255) is 601,536).
+  const int w = 1000, h = 700;
+  std::vector<uint8_t> factors(w * h, 1), goal(w * h, 0);
+  goal[0] = 1;
+  EXPECT_EQ(ComputeWeightedExplorationTransform(w, h, factors, goal)[1], 10);
+  factors[w * h - 1] = 255;
+  EXPECT_THROW(ComputeWeightedExplorationTransform(w, h, factors, goal), std::invalid_argument);
+}
+
 TEST(ExplorationTransformTest, NoGoalsMeansNothingIsReachable) {
   std::vector<uint8_t> trav(12, 1), goal(12, 0);
   for (int32_t c : ComputeExplorationTransform(4, 3, trav, goal)) EXPECT_EQ(c, kUnreachable);
