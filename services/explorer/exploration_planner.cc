@@ -501,12 +501,15 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
   const bool centre_step = off_centre > 0.25 * cs.cell_size_m;
   const bool centre_step_clear = !centre_step || (IsPathClear(occupancy, to_centre, off_centre) &&
                                                   !PassesBlockingObstacle(to_centre, off_centre));
-  // Once squeezing, a step into or out of the margin costs margin_step_cost times a step over free
-  // cells (step_factor; 1 where the wave may go and is no margin, 0 where it may not).
+  // The dilation margin's cells that hold no obstacle and nothing unseen themselves: squeezing
+  // (below) plans through them. Once squeezing, a step into or out of one costs margin_step_cost
+  // times a step over free cells (step_factor; 1 where the wave may go and is no margin, 0 where
+  // it may not).
   std::vector<uint8_t> margin(n, 0), step_factor;
-  const bool weigh_margin = config_.margin_step_cost > 1;
+  for (size_t i = 0; i < n; ++i)
+    margin[i] = cs.cells[i] == CellClass::kOccupied && !cs.obstacle[i] && !cs.unseen[i];
   while (true) {
-    const bool weighed = weigh_margin && squeezing;
+    const bool weighed = config_.margin_step_cost > 1 && squeezing;
     if (weighed) {
       step_factor.assign(n, 0);
       for (size_t i = 0; i < n; ++i)
@@ -577,8 +580,7 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       if (config_.squeeze_through_margin && !squeezing) {
         squeezing = true;
         for (size_t i = 0; i < n; ++i) {
-          if (cs.cells[i] != CellClass::kOccupied || cs.obstacle[i] || cs.unseen[i]) continue;
-          margin[i] = 1;
+          if (!margin[i]) continue;
           traversable_without_keep_off[i] = 1;
           if (!near_blocking[i]) traversable[i] = 1;
         }
@@ -642,7 +644,6 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
     path.insert(path.end(), escape.begin(), escape.end());
     const auto [sx, sy] = path.back();
     const size_t start_index = static_cast<size_t>(sy) * w + sx;
-    plan.transform_cost = cost[start_index];
     int gx = sx, gy = sy;
     if (!goal[start_index]) {
       int x = sx, y = sy;
@@ -704,12 +705,13 @@ Plan ExplorationPlanner::PlanFrom(const GridView& occupancy, const Pose2D& robot
       if (run_ends) waypoints.emplace_back(cs.CentreX(path[i].first), cs.CentreY(path[i].second));
     }
     if (config_.straighten_paths) {
-      std::vector<uint8_t> usable = traversable;
-      if (weighed) {  // a straight move crosses the margin only where the path does
-        for (size_t i = 0; i < n; ++i) usable[i] = usable[i] && !margin[i];
-        for (const auto& [px, py] : path) usable[static_cast<size_t>(py) * w + px] = 1;
+      std::vector<uint8_t> off_margin;  // weighed: a straight move crosses the margin only where the path does
+      if (weighed) {
+        off_margin = traversable;
+        for (size_t i = 0; i < n; ++i) off_margin[i] = off_margin[i] && !margin[i];
+        for (const auto& [px, py] : path) off_margin[static_cast<size_t>(py) * w + px] = 1;
       }
-      waypoints = Straighten(occupancy, cs, usable, {robot.x, robot.y}, waypoints);
+      waypoints = Straighten(occupancy, cs, weighed ? off_margin : traversable, {robot.x, robot.y}, waypoints);
     }
     double x = robot.x, y = robot.y, theta = robot.theta;
     std::optional<std::pair<double, double>> blocked;  // on a move of this plan

@@ -67,7 +67,6 @@ struct Plan {
   int goal_x = -1;        // coarse cell of the unknown space the plan heads for
   int goal_y = -1;
   bool margin_goal = false;  // that cell is in the margin (ExplorerConfig::margin_goals)
-  int32_t transform_cost = 0;  // exploration transform at the robot's cell
   // Retraces moves the robot drove (the way back, see RecordMove): the caller does not look before
   // these moves, since the grid may have drawn something across them; the base's bumper guards.
   bool way_back = false;
