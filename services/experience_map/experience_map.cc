@@ -72,12 +72,18 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     if (manhattan_axes_ && config_.exp_manhattan_sigma_rad > 0) graph_pending_ = true;
   }
   if (!manhattan_axes_) {
-    manhattan_reference_.Add(direction);
-    if (++manhattan_count_ < config_.exp_manhattan_reference_frames) return;
-    if (manhattan_reference_.Agreement() >= kMinAgreement * manhattan_count_)
-      manhattan_axes_ = manhattan_reference_.Mean();
-    manhattan_reference_ = {};
-    manhattan_count_ = 0;
+    // The latest exp_manhattan_reference_frames directions, a window sliding one at a time: a
+    // stretch of walls that agree is found wherever it starts, before the heading drifts.
+    const size_t frames = static_cast<size_t>(config_.exp_manhattan_reference_frames);
+    manhattan_window_.push_back(direction);
+    if (manhattan_window_.size() > frames) manhattan_window_.pop_front();
+    if (manhattan_window_.size() < frames) return;
+    QuarterTurnMean reference;
+    for (double d : manhattan_window_) reference.Add(d);
+    if (reference.Agreement() >= kMinAgreement * static_cast<double>(frames)) {
+      manhattan_axes_ = reference.Mean();
+      manhattan_window_.clear();
+    }
     return;
   }
   const double offset = std::remainder(direction - *manhattan_axes_, kPi / 2.0);
@@ -796,9 +802,7 @@ proto::ExperienceMap ExperienceMap::Save() const {
   m.set_next_sequence(next_sequence_);
   m.set_has_manhattan_axes(manhattan_axes_.has_value());
   m.set_manhattan_axes_rad(manhattan_axes_.value_or(0.0));
-  m.set_manhattan_sum_cos(manhattan_reference_.sum_cos);
-  m.set_manhattan_sum_sin(manhattan_reference_.sum_sin);
-  m.set_manhattan_count(static_cast<uint32_t>(manhattan_count_));
+  for (double d : manhattan_window_) m.add_manhattan_window_rad(d);
   m.set_has_pose_cells_current(pose_cells_current_.has_value());
   m.set_pose_cells_current_id(pose_cells_current_.value_or(0));
   m.set_driven_since_recognition_m(driven_since_recognition_m_);
@@ -879,9 +883,10 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   if (!finite({m.accum_x_m(), m.accum_y_m(), m.accum_facing_rad(), m.accum_time_s()})) {
     Reject("saved odometry accumulator is not finite");
   }
-  if (!finite({m.manhattan_axes_rad(), m.manhattan_sum_cos(), m.manhattan_sum_sin()}) ||
-      m.manhattan_count() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
-    Reject("saved wall axes are not finite or their count is out of range");
+  if (!std::isfinite(m.manhattan_axes_rad()) ||
+      !std::all_of(m.manhattan_window_rad().begin(), m.manhattan_window_rad().end(),
+                   [](double d) { return std::isfinite(d); })) {
+    Reject("saved wall axes or wall directions are not finite");
   }
   if (m.has_pose_cells_current() && m.pose_cells_current_id() >= n) Reject("saved pose-cell experience is unknown");
   if (!std::isfinite(m.driven_since_recognition_m()) || m.driven_since_recognition_m() < 0) {
@@ -939,8 +944,9 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
   local_region_.assign(m.local_region_links().begin(), m.local_region_links().end());
   next_sequence_ = m.next_sequence();
   manhattan_axes_ = m.has_manhattan_axes() ? std::optional(m.manhattan_axes_rad()) : std::nullopt;
-  manhattan_reference_ = {m.manhattan_sum_cos(), m.manhattan_sum_sin()};
-  manhattan_count_ = static_cast<int>(m.manhattan_count());
+  // The latest exp_manhattan_reference_frames of them (a config with a shorter window since).
+  const int window = std::min(m.manhattan_window_rad_size(), config_.exp_manhattan_reference_frames);
+  manhattan_window_.assign(m.manhattan_window_rad().end() - window, m.manhattan_window_rad().end());
   // An older file, without it: the gate wide open.
   turned_since_hold_rad_ =
       m.has_turned_since_hold_rad() ? m.turned_since_hold_rad() : std::numeric_limits<double>::max();

@@ -124,9 +124,8 @@ class ExperienceMap {
 
   // With exp_manhattan: this frame's wall direction in the robot frame, modulo 90 degrees (the
   // odometry's Velocity.wall_direction_rad; call it after Integrate for the frame that saw it).
-  // The first exp_manhattan_reference_frames directions, taken in the map frame, fix the
-  // building's axes if they agree (resultant length of 4 x the angles at least 0.9; else the
-  // next ones are tried); later ones close enough to an axis (the gate of
+  // The first exp_manhattan_reference_frames directions in a row, taken in the map frame, that
+  // agree (resultant length of 4 x the angles at least 0.9) fix the building's axes; later ones close enough to an axis (the gate of
   // experience_map_config.h: exp_manhattan_min_offset_rad after a held wall, widening as the
   // robot turns, at most exp_manhattan_max_offset_rad) turn the robot's heading
   // exp_manhattan_gain of the way onto it. The first direction seen at an
@@ -269,10 +268,10 @@ class ExperienceMap {
   std::vector<LinkTrig> link_trig_;
   uint64_t next_sequence_ = 0;
   double last_correction_ = 0.0;
-  // HoldHeading: the axes once fixed, and while fixing them the mean of the wall directions so far.
+  // HoldHeading: the axes once fixed, and while fixing them the latest wall directions (map frame,
+  // at most exp_manhattan_reference_frames).
   std::optional<double> manhattan_axes_;
-  QuarterTurnMean manhattan_reference_;
-  int manhattan_count_ = 0;
+  std::deque<double> manhattan_window_;
   // Turned (rad, summed absolute) since a wall direction last held the heading: widens the gate.
   // A map saved without it (an older file) loads with the gate wide open.
   double turned_since_hold_rad_ = 0.0;

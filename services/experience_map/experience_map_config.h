@@ -90,8 +90,8 @@ struct ExperienceMapConfig {
   double exp_recognition_max_link_m = 0.0;
   // The robot's heading held to the building's walls (ExperienceMap::HoldHeading): most walls run
   // along two perpendicular directions (the Manhattan-world assumption). The first
-  // exp_manhattan_reference_frames wall directions the odometry reports fix those axes in the
-  // map frame; after that a wall direction close enough to an axis moves the robot's heading
+  // exp_manhattan_reference_frames wall directions in a row that agree fix those axes in the map
+  // frame; after that a wall direction close enough to an axis moves the robot's heading
   // exp_manhattan_gain of the way onto it (one farther off is another wall). Close enough: within
   // exp_manhattan_min_offset_rad right after a wall was held, a gate that widens by
   // exp_manhattan_offset_per_rad_turned for each radian the robot turns until the next one (the
@@ -203,7 +203,7 @@ struct ExperienceMapConfig {
     v("exp_recognition_max_link_m", exp_recognition_max_link_m,
       "> 0: a recognition whose link would be longer than this is refused (m)");
     v("exp_manhattan", exp_manhattan, "hold the robot's heading to the walls' two perpendicular directions");
-    v("exp_manhattan_reference_frames", exp_manhattan_reference_frames, "wall directions that fix the axes at the start");
+    v("exp_manhattan_reference_frames", exp_manhattan_reference_frames, "wall directions in a row that, agreeing, fix the axes");
     v("exp_manhattan_min_offset_rad", exp_manhattan_min_offset_rad,
       "right after a wall was held, a wall direction farther than this from an axis is another wall and is ignored (rad)");
     v("exp_manhattan_offset_per_rad_turned", exp_manhattan_offset_per_rad_turned,

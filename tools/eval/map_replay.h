@@ -16,7 +16,9 @@
 // Pure and deterministic: the caller reads the recording and the config.
 
 #include <cstddef>
+#include <cstdint>
 #include <map>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -45,6 +47,10 @@ struct MapReplayResult {
   std::size_t actions_compared = 0;   // replayed actions with a recorded one for their frame
   std::size_t actions_differing = 0;  // ... that differ from it (kind, ids, offsets, angle, odometry)
   std::size_t profiles_kept = 0;      // drawn into the grid (the others added nothing new)
+  // experience_map.exp_manhattan: the frame whose wall direction fixed the walls' axes, and the
+  // axes (rad, modulo pi/2, in the map frame); none if they were never fixed.
+  std::optional<uint64_t> axes_fixed_frame;
+  double axes_rad = 0.0;
   // experience_map.exp_scan_links: registrations tried, and the links kept (the newer
   // experience's pose in the older's, as measured).
   std::size_t scan_registrations = 0;

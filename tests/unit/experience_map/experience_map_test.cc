@@ -730,6 +730,17 @@ TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
   for (double d : {0.0, 0.3, -0.3, 0.15, 0.4}) scattered.HoldHeading(d);
   EXPECT_FALSE(scattered.manhattan_axes().has_value());
 
+  // The first directions in a row that agree fix the axes wherever they start: here five after
+  // two odd ones (blocks of five counted from the first, as until session 67, would wait for the
+  // second block).
+  ExperienceMap straddled(HeldToWalls());
+  for (double d : {0.44, -0.34, 0.05, 0.05, 0.05, 0.05, 0.05}) {
+    EXPECT_FALSE(straddled.manhattan_axes().has_value());
+    straddled.HoldHeading(d);
+  }
+  ASSERT_TRUE(straddled.manhattan_axes().has_value());
+  EXPECT_NEAR(*straddled.manhattan_axes(), 0.05, 1e-12);
+
   // The axes and the half-gathered reference survive a save and a load.
   ExperienceMap half(HeldToWalls());
   for (int i = 0; i < 3; ++i) half.HoldHeading(0.1);
@@ -741,6 +752,17 @@ TEST(ExperienceMap, HeadingHoldIgnoresOtherWallsAndRefusesBadDirections) {
   ExperienceMap reloaded(HeldToWalls());
   reloaded.Load(loaded.Save());
   EXPECT_EQ(reloaded.manhattan_axes(), loaded.manhattan_axes());
+  // A reference gathered with a longer window keeps its latest directions under a shorter one.
+  ExperienceMap gathered(HeldToWalls());
+  for (double d : {0.4, 0.1, 0.1, 0.1}) gathered.HoldHeading(d);
+  ExperienceMapConfig shorter = HeldToWalls();
+  shorter.exp_manhattan_reference_frames = 3;
+  ExperienceMap trimmed(shorter);
+  trimmed.Load(gathered.Save());
+  EXPECT_FALSE(trimmed.manhattan_axes().has_value());
+  trimmed.HoldHeading(0.1);  // 0.1, 0.1, 0.1: the 0.4 was dropped
+  ASSERT_TRUE(trimmed.manhattan_axes().has_value());
+  EXPECT_NEAR(*trimmed.manhattan_axes(), 0.1, 1e-12);
 
   ExpectKeysRefused(HeldToWalls(),
                     {{"exp_manhattan_gain", [](ExperienceMapConfig& c) { c.exp_manhattan_gain = 0; }},
