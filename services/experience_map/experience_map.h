@@ -125,10 +125,10 @@ class ExperienceMap {
   // With exp_manhattan: this frame's wall direction in the robot frame, modulo 90 degrees (the
   // odometry's Velocity.wall_direction_rad; call it after Integrate for the frame that saw it).
   // The first exp_manhattan_reference_frames directions in a row, taken in the map frame, that
-  // agree (resultant length of 4 x the angles at least 0.9) fix the building's axes; later ones close enough to an axis (the gate of
-  // experience_map_config.h: exp_manhattan_min_offset_rad after a held wall, widening as the
-  // robot turns, at most exp_manhattan_max_offset_rad) turn the robot's heading
-  // exp_manhattan_gain of the way onto it. The first direction seen at an
+  // agree (resultant length of 4 x the angles at least 0.9) fix the building's axes; later ones
+  // close enough to an axis (the gate of experience_map_config.h: exp_manhattan_min_offset_rad
+  // after a held wall, widening as the robot turns, at most exp_manhattan_max_offset_rad) turn the
+  // robot's heading exp_manhattan_gain of the way onto it. The first direction seen at an
   // experience is kept with it (Experience::wall_rad): with exp_graph_optimisation and
   // exp_manhattan_sigma_rad, the least-squares correction holds the experiences themselves to
   // the axes (pose_graph.h). Without exp_manhattan it does nothing.

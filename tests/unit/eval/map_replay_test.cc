@@ -69,6 +69,7 @@ class MapReplayTest : public ::testing::Test {
       v.dt_s = i == 0 ? 0.0 : kDt;
       v.vtrans_mps = i == 0 || turning ? 0.0 : 0.25;
       v.vrot_radps = i == 0 || !turning ? 0.0 : std::numbers::pi / 2 / (kTurnFrames * kDt);
+      v.wall_seen = i > 0 && !turning;  // a wall along each side (the square's axes)
       truth = Compose(truth, {v.vtrans_mps * v.dt_s, 0.0, v.vrot_radps * v.dt_s});
       f.truth = truth;
       f.velocity = v;
@@ -224,6 +225,14 @@ TEST_F(MapReplayTest, EvalMapReplaysARecordingAndJudgesItAsTheDemoDoes) {
                           "loop_closure_precision", "ate_m", "ate_odometry_m", "grid"})
     EXPECT_TRUE(json.contains(key)) << key;
   EXPECT_EQ(json["scan_links"]["against_truth"].size(), json["scan_links"]["kept"].get<size_t>());
+  // The walls' axes: fixed by the first exp_manhattan_reference_frames wall directions (all agree).
+  int walls = 0;
+  uint64_t fixed_at = 0;
+  for (const RecordedFrame& f : run_.frames)
+    if (f.velocity->wall_seen && ++walls == config_.experience_map.map.exp_manhattan_reference_frames) fixed_at = f.frame_seq;
+  ASSERT_TRUE(json["walls_axes"].is_object());
+  EXPECT_EQ(json["walls_axes"]["frame"].get<uint64_t>(), fixed_at);
+  EXPECT_NEAR(json["walls_axes"]["rad"].get<double>(), 0.0, 1e-9);
   EXPECT_GT(json["coverage"].get<double>(), 0.0);
   // The odometry here is the truth, so the map's error is small.
   EXPECT_LT(json["ate_odometry_m"].get<double>(), 1e-6);
