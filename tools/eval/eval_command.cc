@@ -290,8 +290,8 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
     json["actions_compared"] = r.actions_compared;
     json["actions_differing"] = r.actions_differing;
     json["profiles_kept"] = r.profiles_kept;
-    json["walls_axes"] = r.axes_fixed_frame ? nlohmann::json{{"frame", *r.axes_fixed_frame}, {"rad", r.axes_rad}}
-                                            : nlohmann::json(nullptr);
+    json["walls_axes"] = r.axes_fixed ? nlohmann::json{{"frame", r.axes_fixed->frame}, {"rad", r.axes_fixed->rad}}
+                                      : nlohmann::json(nullptr);
     nlohmann::json judged = nlohmann::json::array();
     for (const ScanLinkError& e : JudgeScanLinks(r.scan_links, demo::ExperienceGroundTruth(r.seen)))
       judged.push_back({{"from", e.from_id}, {"to", e.to_id}, {"position_m", e.position_m}, {"heading_rad", e.heading_rad}});

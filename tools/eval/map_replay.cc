@@ -82,10 +82,8 @@ MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config)
     // The experience-map service's (ExperienceMapNode::Apply; an action it would refuse whole is
     // skipped).
     if (action.dt_s > config.experience_map.max_dt_s) continue;
-    if (experience_map::ApplyActionMessage(map, action).axes_fixed) {
-      result.axes_fixed_frame = frame.frame_seq;
-      result.axes_rad = *map.manhattan_axes();
-    }
+    if (experience_map::ApplyActionMessage(map, action).axes_fixed)
+      result.axes_fixed = MapReplayResult::AxesFixed{frame.frame_seq, *map.manhattan_axes()};
     const Pose2D robot = map.RobotPose();
     seen.experience_poses.push_back({frame.frame_seq, frame.stamp_ns, robot.x, robot.y, robot.theta});
     uint32_t current = pose_cells::kNoExperience;

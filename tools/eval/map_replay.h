@@ -49,8 +49,11 @@ struct MapReplayResult {
   std::size_t profiles_kept = 0;      // drawn into the grid (the others added nothing new)
   // experience_map.exp_manhattan: the frame whose wall direction fixed the walls' axes, and the
   // axes (rad, modulo pi/2, in the map frame); none if they were never fixed.
-  std::optional<uint64_t> axes_fixed_frame;
-  double axes_rad = 0.0;
+  struct AxesFixed {
+    uint64_t frame = 0;
+    double rad = 0.0;
+  };
+  std::optional<AxesFixed> axes_fixed;
   // experience_map.exp_scan_links: registrations tried, and the links kept (the newer
   // experience's pose in the older's, as measured).
   std::size_t scan_registrations = 0;

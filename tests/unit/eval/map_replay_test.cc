@@ -228,8 +228,9 @@ TEST_F(MapReplayTest, EvalMapReplaysARecordingAndJudgesItAsTheDemoDoes) {
   // The walls' axes: fixed by the first exp_manhattan_reference_frames wall directions (all agree).
   int walls = 0;
   uint64_t fixed_at = 0;
+  const int reference_frames = config_.experience_map.map.exp_manhattan_reference_frames;
   for (const RecordedFrame& f : run_.frames)
-    if (f.velocity->wall_seen && ++walls == config_.experience_map.map.exp_manhattan_reference_frames) fixed_at = f.frame_seq;
+    if (f.velocity->wall_seen && ++walls == reference_frames) fixed_at = f.frame_seq;
   ASSERT_TRUE(json["walls_axes"].is_object());
   EXPECT_EQ(json["walls_axes"]["frame"].get<uint64_t>(), fixed_at);
   EXPECT_NEAR(json["walls_axes"]["rad"].get<double>(), 0.0, 1e-9);
