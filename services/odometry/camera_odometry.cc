@@ -19,6 +19,7 @@ CameraOdometry::CameraOdometry(const VisualOdometryConfig& visual, const FloorOd
 void CameraOdometry::Reset() {
   visual_.Reset();
   if (floor_) floor_->Reset();
+  moved_ = false;
 }
 
 const CameraOdometryFrame& CameraOdometry::Update(const cv::Mat& image, double dt_s) {
@@ -40,9 +41,11 @@ void CameraOdometry::FloorMotion(const cv::Mat& image, double dt_s) {
   PlanarMotion prior;
   prior.dx = velocity.vtrans * dt_s;
   prior.dtheta = velocity.vrot * dt_s;
-  const double moving_difference = floor_config_.moving_difference;
-  const PlanarMotion motion =
-      floor_->Update(frame_.boundary, prior, moving_difference > 0 && velocity.speed_difference > moving_difference);
+  const double hold = floor_config_.moving_difference_hold;
+  const double moving_difference = moved_ && hold > 0 ? hold : floor_config_.moving_difference;
+  const bool camera_moves = moving_difference > 0 && velocity.speed_difference > moving_difference;
+  moved_ = camera_moves || prior.dx != 0;
+  const PlanarMotion motion = floor_->Update(frame_.boundary, prior, camera_moves);
   frame_.wall_direction = WallDirection(frame_.boundary, floor_config_.wall_direction);
   if (dt_s <= 0) return;
   const double turn_in_place = visual_.config().turn_in_place_vrot_radps;
@@ -50,6 +53,25 @@ void CameraOdometry::FloorMotion(const cv::Mat& image, double dt_s) {
   // Unregistered, the floor odometry returns the prior with its constant-velocity forward step.
   velocity.vtrans = motion.dx / dt_s;
   if (motion.measured) velocity.vrot = motion.dtheta / dt_s;
+}
+
+msg::Velocity CameraOdometry::Message(double dt_s) const {
+  msg::Velocity out;
+  out.vtrans_mps = frame_.velocity.vtrans;
+  out.vrot_radps = frame_.velocity.vrot;
+  out.dt_s = dt_s;
+  out.source = msg::VelocitySource::VELOCITY_VISUAL;
+  if (frame_.wall_direction) {
+    out.wall_seen = true;
+    out.wall_direction_rad = *frame_.wall_direction;
+  }
+  if (floor_) {
+    out.boundary_measured = true;
+    out.boundary.reserve(frame_.boundary.size());
+    for (const Eigen::Vector2d& p : frame_.boundary)
+      out.boundary.push_back({static_cast<float>(p.x()), static_cast<float>(p.y())});
+  }
+  return out;
 }
 
 }  // namespace rslam::odometry

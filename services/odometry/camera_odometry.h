@@ -24,6 +24,7 @@
 #include "services/odometry/floor_odometry.h"
 #include "services/odometry/odometry_node_config.h"
 #include "services/odometry/visual_odometry.h"
+#include "rslam/msg/all_messages.h"
 
 namespace rslam::odometry {
 
@@ -49,6 +50,10 @@ class CameraOdometry {
   void Reset();
   bool floor_odometry() const { return floor_ != nullptr; }
 
+  // The odometry/velocity message of the last Update (dt_s its dt), as the odometry service
+  // publishes it; the header is the caller's.
+  msg::Velocity Message(double dt_s) const;
+
  private:
   // Replaces frame_.velocity by the floor-boundary registration's (see the header comment).
   void FloorMotion(const cv::Mat& image, double dt_s);
@@ -58,6 +63,7 @@ class CameraOdometry {
   std::unique_ptr<occupancy::ObstacleProfilePipeline> boundary_;  // floor odometry only
   std::unique_ptr<FloorOdometry> floor_;
   CameraOdometryFrame frame_;
+  bool moved_ = false;  // the previous frame was taken as moving (moving_difference_hold)
 };
 
 }  // namespace rslam::odometry

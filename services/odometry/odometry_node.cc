@@ -88,9 +88,8 @@ class OdometryNode::Impl {
       }
     }
     if (restart) dt_s = 0.0;
-    const CameraOdometryFrame* frame = nullptr;
     try {
-      frame = &odometry_.Update(view, dt_s);
+      odometry_.Update(view, dt_s);
     } catch (const std::invalid_argument& e) {
       odometry_.Reset();
       previous_stamp_ns_.reset();
@@ -99,22 +98,8 @@ class OdometryNode::Impl {
     previous_stamp_ns_ = image.header.stamp_ns;
     previous_size_ = view.size();
 
-    msg::Velocity out;
+    msg::Velocity out = odometry_.Message(dt_s);
     out.header = image.header;
-    out.vtrans_mps = frame->velocity.vtrans;
-    out.vrot_radps = frame->velocity.vrot;
-    out.dt_s = dt_s;
-    out.source = msg::VelocitySource::VELOCITY_VISUAL;
-    if (frame->wall_direction) {
-      out.wall_seen = true;
-      out.wall_direction_rad = *frame->wall_direction;
-    }
-    if (odometry_.floor_odometry()) {
-      out.boundary_measured = true;
-      out.boundary.reserve(frame->boundary.size());
-      for (const Eigen::Vector2d& p : frame->boundary)
-        out.boundary.push_back({static_cast<float>(p.x()), static_cast<float>(p.y())});
-    }
     Publish(out);
     context_.SetLastFrame(image.header.frame_seq, image.header.stamp_ns);
   }

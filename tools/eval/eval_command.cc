@@ -68,6 +68,7 @@ struct MapCommandOptions {
   std::vector<std::string> overrides;
   std::string robot;
   bool recorded_actions = false;
+  bool odometry_again = false;
   std::string out_dir;
   bool json = false;
 };
@@ -213,6 +214,26 @@ std::vector<ReplayedFrame> RecordedFrames(const RecordedRun& run) {
   return out;
 }
 
+// Replaces the run's odometry/velocity by the odometry read again (config's `odometry` section)
+// on its frames rendered anew at the recorded truth; a frame without truth loses its velocity.
+OdometryReplayResult ReadOdometryAgain(const YAML::Node& config, const sim::SimConfig& sim,
+                                       const sim::WorldMap& world, RecordedRun& run) {
+  odometry::OdometryNodeConfig odometry;
+  LoadConfigSection(config, "odometry", odometry);
+  const std::vector<ReplayedFrame> frames = RecordedFrames(run);
+  if (frames.size() < 2) throw std::invalid_argument("fewer than two sim/ground_truth frames to read the odometry on");
+  std::vector<msg::Velocity> messages;
+  const OdometryReplayResult result = ReplayOdometry(world, sim, odometry, frames, &messages);
+  auto message = messages.begin();
+  for (RecordedFrame& f : run.frames) {
+    f.velocity.reset();
+    if (!f.truth) continue;
+    f.velocity = std::move(*message++);
+    f.velocity->header.robot_id = run.robot;
+  }
+  return result;
+}
+
 void RunOdometry(const OdometryCommandOptions& options, std::ostream& out, std::ostream& err) {
   try {
     YAML::Node config = LoadYamlFile(options.config_file);
@@ -271,13 +292,15 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
     LoadConfigSection(config, "experience_map", replay.experience_map);
     LoadConfigSection(config, "occupancy", replay.occupancy);
     replay.recorded_actions = options.recorded_actions;
-    const RecordedRun run = ReadRecordedRun(options.recording, options.robot);
+    RecordedRun run = ReadRecordedRun(options.recording, options.robot);
     if (run.frames.empty()) Fail(err, "map", options.recording + " holds no frames of a robot");
     for (const std::string& skipped : run.skipped) err << "rslam eval map: left out " << skipped << "\n";
+    const sim::WorldMap world = sim::WorldMap::LoadFromYaml(sim::ResolveWorldPath(sim.sim.world_yaml));
+    std::optional<OdometryReplayResult> odometry_again;
+    if (options.odometry_again) odometry_again = ReadOdometryAgain(config, sim.sim, world, run);
     const MapReplayResult r = ReplayMap(run, replay);
 
     // Judged as `rslam demo` judges its run (tools/demo/demo_metrics.h).
-    const sim::WorldMap world = sim::WorldMap::LoadFromYaml(sim::ResolveWorldPath(sim.sim.world_yaml));
     const Pose2D start = sim::StartPoseOf(sim, world);
     const std::vector<Eigen::Vector2i> reachable =
         demo::ReachableFootprint(world, start, sim.sim.motion.robot_radius_m);
@@ -287,6 +310,11 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
     nlohmann::json json = demo::FiguresJson(figures, r.seen, map_origin, world.resolution());
     json["robot"] = run.robot;
     json["actions"] = options.recorded_actions ? "recorded" : "replayed";
+    json["odometry_read_again"] =
+        odometry_again ? nlohmann::json{{"dead_reckoning_ate_m", odometry_again->ate_m},
+                                        {"scale", odometry_again->scale},
+                                        {"frames_differing_from_recorded", odometry_again->frames_differing_from_recorded}}
+                       : nlohmann::json(nullptr);
     json["actions_compared"] = r.actions_compared;
     json["actions_differing"] = r.actions_differing;
     json["profiles_kept"] = r.profiles_kept;
@@ -412,8 +440,12 @@ void RegisterEvalCommand(CLI::App& rslam, std::ostream& out, std::ostream& err) 
       ->check(CLI::ExistingFile);
   map->add_option("--set", map_options->overrides, "override a config key (section.key=value), repeatable");
   map->add_option("--robot", map_options->robot, "the robot to replay (default: the first recorded)");
+  CLI::Option* odometry_again = map->add_flag("--odometry-again", map_options->odometry_again,
+                "read the odometry again (the config's odometry section) on frames rendered anew at the recorded "
+                "truth, as `rslam eval odometry` does, instead of the recorded odometry/velocity");
   map->add_flag("--recorded-actions", map_options->recorded_actions,
                 "apply the recorded pose_cells/action instead of running the pose cells again");
+  odometry_again->excludes("--recorded-actions");
   map->add_option("--out", map_options->out_dir, "also write summary.json, experience_map.png and grid_errors.png here");
   map->add_flag("--json", map_options->json, "Print the result as one JSON object");
   map->callback([map_options, &out, &err] { RunMap(*map_options, out, err); });

@@ -14,7 +14,8 @@
 namespace rslam::eval {
 
 OdometryReplayResult ReplayOdometry(const sim::WorldMap& world, const sim::SimConfig& sim,
-                                    const odometry::OdometryNodeConfig& config, std::span<const ReplayedFrame> frames) {
+                                    const odometry::OdometryNodeConfig& config, std::span<const ReplayedFrame> frames,
+                                    std::vector<msg::Velocity>* messages) {
   if (frames.size() < 2) throw std::invalid_argument("ReplayOdometry: fewer than two frames");
   sim::CameraRenderer renderer(world, sim.scene, sim.camera);
   odometry::CameraOdometry odometry(config.visual, config.floor);
@@ -32,6 +33,11 @@ OdometryReplayResult ReplayOdometry(const sim::WorldMap& world, const sim::SimCo
     const double dt = i == 0 ? 0.0 : static_cast<double>(frame.stamp_ns - frames[i - 1].stamp_ns) * 1e-9;
     renderer.Render(frame.truth, frame.frame_seq, image);
     const odometry::Velocity& v = odometry.Update(image, dt).velocity;
+    if (messages) {
+      msg::Velocity& m = messages->emplace_back(odometry.Message(dt));
+      m.header.frame_seq = frame.frame_seq;
+      m.header.stamp_ns = frame.stamp_ns;
+    }
     if (frame.recorded_vtrans_mps && frame.recorded_vrot_radps) {
       ++result.frames_recorded;
       if (std::abs(*frame.recorded_vtrans_mps - v.vtrans) > 1e-9 || std::abs(*frame.recorded_vrot_radps - v.vrot) > 1e-9)

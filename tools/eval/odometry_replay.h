@@ -11,8 +11,10 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "common/math/pose2d.h"
+#include "rslam/msg/all_messages.h"
 #include "services/odometry/odometry_node_config.h"
 #include "tools/sim/sim_config.h"
 #include "tools/sim/world_map.h"
@@ -42,8 +44,10 @@ struct OdometryReplayResult {
 };
 
 // Throws std::invalid_argument for fewer than two frames, stamps that do not increase, or a pose
-// the renderer cannot use; ConfigError for a bad config.
+// the renderer cannot use; ConfigError for a bad config. messages, if given, receives each frame's
+// odometry/velocity as the odometry service would publish it (header: frame_seq and stamp).
 OdometryReplayResult ReplayOdometry(const sim::WorldMap& world, const sim::SimConfig& sim,
-                                    const odometry::OdometryNodeConfig& config, std::span<const ReplayedFrame> frames);
+                                    const odometry::OdometryNodeConfig& config, std::span<const ReplayedFrame> frames,
+                                    std::vector<msg::Velocity>* messages = nullptr);
 
 }  // namespace rslam::eval

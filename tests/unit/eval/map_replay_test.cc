@@ -213,6 +213,24 @@ TEST(JudgeScanLinks, MeasuresEachLinkAgainstItsEndsTrueRelativePose) {
   EXPECT_NEAR(judged[1].heading_rad, 0.1, 1e-12);
 }
 
+TEST_F(MapReplayTest, EvalMapReadsTheOdometryAgainOnFramesRenderedAtTheTruth) {
+  // The recorded odometry here is the truth itself; read again from the frames rendered where the
+  // robot stood, it is the camera's, which is not (and cannot follow the square's quarter turns in
+  // 0.4 s, four times the simulator's turn rate).
+  const std::string path = WriteRecording();
+  EXPECT_TRUE(nlohmann::json::parse(RunRslam({"eval", "map", path, "--json"}))["odometry_read_again"].is_null());
+  const auto json = nlohmann::json::parse(RunRslam({"eval", "map", path, "--json", "--odometry-again"}));
+  const nlohmann::json& again = json["odometry_read_again"];
+  ASSERT_TRUE(again.is_object());
+  EXPECT_GT(again["frames_differing_from_recorded"].get<size_t>(), run_.frames.size() / 2);
+  EXPECT_GT(again["dead_reckoning_ate_m"].get<double>(), 1e-3);
+  EXPECT_GT(json["actions_differing"].get<size_t>(), 0u);
+  EXPECT_GT(json["ate_odometry_m"].get<double>(), 1e-3);
+  EXPECT_EQ(json["frames"].get<size_t>(), run_.frames.size());
+  // The recorded actions do not use the odometry: the two flags together are refused.
+  EXPECT_THROW(RunRslam({"eval", "map", path, "--odometry-again", "--recorded-actions"}), CLI::ExcludesError);
+}
+
 TEST_F(MapReplayTest, EvalMapReplaysARecordingAndJudgesItAsTheDemoDoes) {
   const std::string path = WriteRecording();
   const auto json = nlohmann::json::parse(RunRslam({"eval", "map", path, "--json", "--out", (dir_ / "out").string()}));

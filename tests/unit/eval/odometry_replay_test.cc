@@ -94,7 +94,22 @@ TEST_F(OdometryReplayTest, DeadReckonsTheDemoOdometryOnFramesRenderedAtTheTruth)
 
 TEST_F(OdometryReplayTest, GivesBackTheRecordedVelocitiesAndCountsThoseItDoesNot) {
   RecordVelocities();
-  EXPECT_EQ(ReplayOdometry(world_, sim_.sim, odometry_, frames_).frames_differing_from_recorded, 0u);
+  std::vector<msg::Velocity> messages;
+  EXPECT_EQ(ReplayOdometry(world_, sim_.sim, odometry_, frames_, &messages).frames_differing_from_recorded, 0u);
+  // ... and the messages the service would publish for them (rslam eval map --odometry-again).
+  ASSERT_EQ(messages.size(), frames_.size());
+  size_t walls = 0;
+  for (size_t i = 0; i < frames_.size(); ++i) {
+    EXPECT_EQ(messages[i].header.frame_seq, frames_[i].frame_seq);
+    EXPECT_EQ(messages[i].header.stamp_ns, frames_[i].stamp_ns);
+    EXPECT_EQ(messages[i].vtrans_mps, *frames_[i].recorded_vtrans_mps);
+    EXPECT_EQ(messages[i].vrot_radps, *frames_[i].recorded_vrot_radps);
+    EXPECT_TRUE(messages[i].boundary_measured);
+    walls += messages[i].wall_seen;
+  }
+  EXPECT_EQ(messages[0].dt_s, 0.0);
+  EXPECT_NEAR(messages[1].dt_s, sim_.sim.motion.time_step_s, 1e-9);
+  EXPECT_GT(walls, 0u);
   frames_[40].recorded_vrot_radps = *frames_[40].recorded_vrot_radps + 0.01;
   const OdometryReplayResult r = ReplayOdometry(world_, sim_.sim, odometry_, frames_);
   EXPECT_EQ(r.frames_recorded, frames_.size());
