@@ -20,11 +20,11 @@
 #include <optional>
 #include <vector>
 
+#include "rslam/msg/all_messages.h"
 #include "services/occupancy/obstacle_profile_pipeline.h"
 #include "services/odometry/floor_odometry.h"
 #include "services/odometry/odometry_node_config.h"
 #include "services/odometry/visual_odometry.h"
-#include "rslam/msg/all_messages.h"
 
 namespace rslam::odometry {
 

@@ -440,9 +440,10 @@ void RegisterEvalCommand(CLI::App& rslam, std::ostream& out, std::ostream& err) 
       ->check(CLI::ExistingFile);
   map->add_option("--set", map_options->overrides, "override a config key (section.key=value), repeatable");
   map->add_option("--robot", map_options->robot, "the robot to replay (default: the first recorded)");
-  CLI::Option* odometry_again = map->add_flag("--odometry-again", map_options->odometry_again,
-                "read the odometry again (the config's odometry section) on frames rendered anew at the recorded "
-                "truth, as `rslam eval odometry` does, instead of the recorded odometry/velocity");
+  CLI::Option* odometry_again =
+      map->add_flag("--odometry-again", map_options->odometry_again,
+                    "read the odometry again (the config's odometry section) on frames rendered anew at the "
+                    "recorded truth, as `rslam eval odometry` does, instead of the recorded odometry/velocity");
   map->add_flag("--recorded-actions", map_options->recorded_actions,
                 "apply the recorded pose_cells/action instead of running the pose cells again");
   odometry_again->excludes("--recorded-actions");
