@@ -48,7 +48,6 @@ class CameraOdometry {
   const CameraOdometryFrame& Update(const cv::Mat& image, double dt_s);
 
   void Reset();
-  bool floor_odometry() const { return floor_ != nullptr; }
 
   // The odometry/velocity message of the last Update (dt_s its dt), as the odometry service
   // publishes it; the header is the caller's.

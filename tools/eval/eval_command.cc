@@ -221,7 +221,6 @@ OdometryReplayResult ReadOdometryAgain(const YAML::Node& config, const sim::SimC
   odometry::OdometryNodeConfig odometry;
   LoadConfigSection(config, "odometry", odometry);
   const std::vector<ReplayedFrame> frames = RecordedFrames(run);
-  if (frames.size() < 2) throw std::invalid_argument("fewer than two sim/ground_truth frames to read the odometry on");
   std::vector<msg::Velocity> messages;
   const OdometryReplayResult result = ReplayOdometry(world, sim, odometry, frames, &messages);
   auto message = messages.begin();
