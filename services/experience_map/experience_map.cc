@@ -445,27 +445,39 @@ std::vector<Eigen::Vector2f> ExperienceMap::StretchPoints(uint32_t centre, uint3
 }
 
 void ExperienceMap::TryScanLink(uint32_t a) {
-  const Experience& newer = experiences_[a];
   const uint32_t age = static_cast<uint32_t>(config_.exp_scan_min_age);
   if (a < age) return;
-  // The old experience nearest to a in the map.
-  std::optional<uint32_t> older;
-  double nearest = config_.exp_scan_radius_m;
+  const Experience& newer = experiences_[a];
+  const uint32_t region = static_cast<uint32_t>(config_.exp_scan_region);
+  // The old experiences within exp_scan_radius_m of a in the map, as visits (their ids more than
+  // two regions apart: stretches that do not overlap), and the nearest of each.
+  std::vector<std::pair<double, uint32_t>> visits;
+  uint32_t previous = 0;
   for (uint32_t j = 0; j <= a - age; ++j) {
     const double d = std::hypot(experiences_[j].x_m - newer.x_m, experiences_[j].y_m - newer.y_m);
-    if (d <= nearest) {
-      nearest = d;
-      older = j;
-    }
+    if (d > config_.exp_scan_radius_m) continue;
+    if (visits.empty() || j - previous > 2 * region)
+      visits.emplace_back(d, j);
+    else if (d <= visits.back().first)
+      visits.back() = {d, j};
+    previous = j;
   }
-  if (!older) return;
-  const uint32_t region = static_cast<uint32_t>(config_.exp_scan_region);
+  std::sort(visits.begin(), visits.end());
+  visits.resize(std::min(visits.size(), static_cast<size_t>(config_.exp_scan_visits)));
+  std::erase_if(recent_scans_, [&](const RecentScan& s) {
+    return a - s.scan.link.to_id > static_cast<uint32_t>(config_.exp_scan_confirm_ids);
+  });
+  if (visits.empty()) return;
   const std::vector<Eigen::Vector2f> source = StretchPoints(a, static_cast<uint32_t>(experiences_.size()));
-  const std::vector<Eigen::Vector2f> target = StretchPoints(*older, a - region);  // the stretches do not overlap
-  const size_t min_pairs = static_cast<size_t>(config_.exp_scan_min_pairs);
-  if (source.size() < min_pairs || target.size() < min_pairs) return;
-  const Experience& o = experiences_[*older];
-  const Pose2D guess = Between(o.pose(), newer.pose());
+  if (source.size() < static_cast<size_t>(config_.exp_scan_min_pairs)) return;
+  for (const auto& [distance, older] : visits) RegisterStretch(a, older, source);
+}
+
+void ExperienceMap::RegisterStretch(uint32_t a, uint32_t older, const std::vector<Eigen::Vector2f>& source) {
+  const uint32_t region = static_cast<uint32_t>(config_.exp_scan_region);
+  const std::vector<Eigen::Vector2f> target = StretchPoints(older, a - region);  // the stretches do not overlap
+  if (target.size() < static_cast<size_t>(config_.exp_scan_min_pairs)) return;
+  const Pose2D guess = Between(experiences_[older].pose(), experiences_[a].pose());
   ++scan_registrations_;
   const std::optional<ScanRegistration> r = RegisterScans(target, source, guess, kScanRegistration);
   if (!r || r->pairs < config_.exp_scan_min_pairs || r->median_distance_m > config_.exp_scan_max_distance_m ||
@@ -476,19 +488,23 @@ void ExperienceMap::TryScanLink(uint32_t a) {
       std::abs(correction.theta) > config_.exp_scan_max_correction_rad)
     return;
   ScanLink scan;
-  scan.link.from_id = *older;
+  scan.link.from_id = older;
   scan.link.to_id = a;
   scan.link.d_m = std::hypot(r->pose.x, r->pose.y);
   scan.link.heading_rad = std::atan2(r->pose.y, r->pose.x);
   scan.link.facing_rad = r->pose.theta;
   scan.information = r->information;
   if (config_.exp_scan_confirm_ids > 0) {
-    const bool confirmed = last_scan_ &&
-                           a - last_scan_->link.to_id <= static_cast<uint32_t>(config_.exp_scan_confirm_ids) &&
-                           ScanLinksAgree(*last_scan_, scan);
-    if (confirmed && !last_scan_kept_) scan_links_.push_back(*last_scan_);
-    last_scan_ = scan;
-    last_scan_kept_ = confirmed;
+    // Confirmed by any agreeing registration around an earlier experience (another stretch, so
+    // another measurement); that one is kept too.
+    bool confirmed = false;
+    for (RecentScan& s : recent_scans_) {
+      if (s.scan.link.to_id == a || !ScanLinksAgree(s.scan, scan)) continue;
+      if (!s.kept) scan_links_.push_back(s.scan);
+      s.kept = true;
+      confirmed = true;
+    }
+    recent_scans_.push_back({scan, confirmed});
     if (!confirmed) return;
   }
   scan_links_.push_back(scan);
@@ -818,8 +834,10 @@ proto::ExperienceMap ExperienceMap::Save() const {
   bridge->set_time_s(bridge_time_);
   bridge->set_facing_offset_rad(bridge_facing_offset_);
   bridge->set_pending(bridge_pending_);
-  if (last_scan_) save_scan(*last_scan_, m.mutable_last_scan());
-  m.set_last_scan_kept(last_scan_kept_);
+  for (const RecentScan& s : recent_scans_) {
+    save_scan(s.scan, m.add_recent_scans());
+    m.add_recent_scans_kept(s.kept);
+  }
   m.set_graph_pending(graph_pending_);
   m.set_frames_since_graph(static_cast<uint32_t>(frames_since_graph_));
   m.set_refused_recognitions(refused_recognitions_);
@@ -857,7 +875,8 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
       Reject("saved scan link's information is not finite");
   };
   for (const auto& l : m.scan_links()) check_scan(l);
-  if (m.has_last_scan()) check_scan(m.last_scan());
+  for (const auto& l : m.recent_scans()) check_scan(l);
+  if (m.recent_scans_kept_size() > m.recent_scans_size()) Reject("saved registrations' flags outnumber them");
   if (m.has_turned_since_hold_rad() && !(m.turned_since_hold_rad() >= 0)) {
     Reject("saved turn since the last heading hold is not a number or negative");
   }
@@ -915,7 +934,7 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
     links_to_[p.to_id()].push_back(i);
   }
   scan_links_.clear();
-  last_scan_.reset();
+  recent_scans_.clear();
   // A link saved before its turn was measured (turn entries zero) has its facing weighed as it
   // was then, by 1 / exp_graph_scan_sigma_rad^2.
   const double unmeasured_turn = config_.exp_graph_scan_sigma_m * config_.exp_graph_scan_sigma_m /
@@ -931,8 +950,8 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
     return scan;
   };
   for (const auto& p : m.scan_links()) scan_links_.push_back(load_scan(p));
-  if (m.has_last_scan()) last_scan_ = load_scan(m.last_scan());
-  last_scan_kept_ = m.last_scan_kept();
+  for (int k = 0; k < m.recent_scans_size(); ++k)
+    recent_scans_.push_back({load_scan(m.recent_scans(k)), k < m.recent_scans_kept_size() && m.recent_scans_kept(k)});
   has_current_ = m.has_current();
   current_ = m.current_id();
   accum_x_ = m.accum_x_m();

@@ -230,8 +230,12 @@ class ExperienceMap {
   // robot too far from where the map has it, or link two places too far apart.
   std::optional<RecognitionRefusal> RefusalOf(const ExperienceAction& a, double link_m) const;
   // exp_scan_links: registers the stretch around experience `a` with the one around the nearest
-  // old experience in the map, and keeps a scan link when they agree.
+  // old experience of each of the exp_scan_visits nearest visits in the map, and keeps a scan
+  // link when they agree.
   void TryScanLink(uint32_t a);
+  // ... one of those registrations: the stretch around `a` (its points `source`) with the one
+  // around `older`.
+  void RegisterStretch(uint32_t a, uint32_t older, const std::vector<Eigen::Vector2f>& source);
   // exp_scan_confirm_ids: the loop scan links a and b close with the map's placement of their ends
   // is within exp_scan_confirm_m / _rad.
   bool ScanLinksAgree(const ScanLink& a, const ScanLink& b) const;
@@ -286,10 +290,13 @@ class ExperienceMap {
   uint64_t heading_recaptures_ = 0;
   std::vector<ScanLink> scan_links_;
   uint64_t scan_registrations_ = 0;
-  // exp_scan_confirm_ids: the latest registration kept or waiting for another to confirm it, and
-  // whether it is kept.
-  std::optional<ScanLink> last_scan_;
-  bool last_scan_kept_ = false;
+  // exp_scan_confirm_ids: the registrations made around the latest exp_scan_confirm_ids ids, each
+  // kept or waiting for another to confirm it.
+  struct RecentScan {
+    ScanLink scan;
+    bool kept = false;
+  };
+  std::vector<RecentScan> recent_scans_;
   // exp_bridge_recognitions: the experience made last (bridge_from_), the robot's odometry since
   // it in its frame as it was made (x, y, time), the robot's facing in that frame minus
   // accum_facing_ (only a recognition changes it), and whether a recognition was taken since. A

@@ -127,7 +127,12 @@ struct ExperienceMapConfig {
   // every exp_scan_every-th experience, the stretch of the map around a (the experiences within
   // exp_scan_region ids of it, placed as the map has them) is registered with the stretch around
   // the experience nearest to a in the map, if one made at least exp_scan_min_age experiences
-  // before lies within exp_scan_radius_m. A registration with exp_scan_min_pairs pairs, a median
+  // before lies within exp_scan_radius_m. With exp_scan_visits > 1, the old experiences within
+  // exp_scan_radius_m are taken as visits (split where their ids jump by more than twice
+  // exp_scan_region, so their stretches do not overlap), and a is registered with the nearest
+  // experience of each of the exp_scan_visits nearest visits: a stretch the map draws off (the
+  // first, which can hang on one odometric link) is still tried where a later visit lies nearer
+  // to a. A registration with exp_scan_min_pairs pairs, a median
   // pair distance under exp_scan_max_distance_m, exp_scan_min_inlier_share of a's points on the
   // other's walls, walls facing enough ways to fix the pose along them (exp_scan_min_weak_share)
   // and a correction of the map within exp_scan_max_correction_m / _rad becomes a link of its own
@@ -137,8 +142,8 @@ struct ExperienceMapConfig {
   // the map's links.
   //
   // With exp_scan_confirm_ids > 0 a registration waits until another confirms it: one made
-  // around an experience at most that many ids later whose measurement closes the loop the two
-  // make with the map's placement of their ends within exp_scan_confirm_m / _rad. Right
+  // around an experience at most that many ids later (of any visit) whose measurement closes the
+  // loop the two make with the map's placement of their ends within exp_scan_confirm_m / _rad. Right
   // registrations come in runs along a revisited wall and agree; a wall matched to its neighbour
   // stands alone. Once a run is confirmed each next registration that agrees with its last link
   // is kept at once.
@@ -148,6 +153,7 @@ struct ExperienceMapConfig {
   int exp_scan_every = 5;
   int exp_scan_min_age = 150;
   double exp_scan_radius_m = 1.0;
+  int exp_scan_visits = 1;
   int exp_scan_min_pairs = 40;
   double exp_scan_max_distance_m = 0.03;
   double exp_scan_min_inlier_share = 0.5;
@@ -230,6 +236,7 @@ struct ExperienceMapConfig {
     v("exp_scan_every", exp_scan_every, "register the stretch around every this-many-th experience");
     v("exp_scan_min_age", exp_scan_min_age, "... with one whose centre was made at least this many experiences before");
     v("exp_scan_radius_m", exp_scan_radius_m, "... and lies within this distance in the map (m)");
+    v("exp_scan_visits", exp_scan_visits, "... with the nearest experience of each of this many earlier visits nearest to it");
     v("exp_scan_min_pairs", exp_scan_min_pairs, "a registration needs this many point pairs");
     v("exp_scan_max_distance_m", exp_scan_max_distance_m, "... their median distance under this (m)");
     v("exp_scan_min_inlier_share", exp_scan_min_inlier_share,
@@ -307,6 +314,7 @@ struct ExperienceMapConfig {
     Require(exp_scan_min_age > 2 * exp_scan_region, "exp_scan_min_age",
             "must exceed twice exp_scan_region (the two stretches must not overlap)");
     Require(std::isfinite(exp_scan_radius_m) && exp_scan_radius_m > 0, "exp_scan_radius_m", "must be positive");
+    Require(exp_scan_visits >= 1, "exp_scan_visits", "must be at least 1");
     Require(exp_scan_min_pairs >= 3, "exp_scan_min_pairs", "must be at least 3");
     Require(std::isfinite(exp_scan_max_distance_m) && exp_scan_max_distance_m > 0, "exp_scan_max_distance_m",
             "must be positive");

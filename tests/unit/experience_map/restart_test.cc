@@ -177,7 +177,7 @@ TEST(ExperienceMapRestart, AMapFileWithoutTheRestartStateLoadsAsBefore) {
   const proto::ExperienceMap again = loaded.Save();
   EXPECT_GT(again.turned_since_hold_rad(), 1e300) << "the heading gate wide open";
   EXPECT_EQ(again.bridge().from_id(), saved.current_id()) << "a bridge started at the current experience";
-  EXPECT_FALSE(again.has_last_scan());
+  EXPECT_EQ(again.recent_scans_size(), 0);
 }
 
 TEST(ExperienceMapRestart, ABrokenRestartStateIsRefusedWhole) {
@@ -185,13 +185,14 @@ TEST(ExperienceMapRestart, ABrokenRestartStateIsRefusedWhole) {
   ExperienceMap loaded(DemoConfig());
   loaded.Load(good);
   const std::string before = loaded.Save().SerializeAsString();
-  std::vector<proto::ExperienceMap> broken(6, good);
+  std::vector<proto::ExperienceMap> broken(7, good);
   broken[0].set_turned_since_hold_rad(-1.0);
   broken[1].add_outside_gate_offset_rad(0.4);  // without its turn
   broken[2].mutable_bridge()->set_from_id(100000);
   broken[3].mutable_bridge()->set_x_m(std::nan(""));
-  broken[4].mutable_last_scan()->mutable_link()->set_to_id(100000);
+  broken[4].add_recent_scans()->mutable_link()->set_to_id(100000);
   broken[5].set_frames_since_graph(0xffffffffu);
+  broken[6].add_recent_scans_kept(true);  // a flag without its registration
   for (size_t i = 0; i < broken.size(); ++i) {
     EXPECT_THROW(loaded.Load(broken[i]), std::invalid_argument) << i;
     EXPECT_EQ(loaded.Save().SerializeAsString(), before) << "a refused load changes nothing (" << i << ")";
