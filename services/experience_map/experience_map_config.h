@@ -132,8 +132,8 @@ struct ExperienceMapConfig {
   // exp_scan_region, so their stretches do not overlap), and a is registered with the nearest
   // experience of each of the exp_scan_visits nearest visits: a stretch the map draws off (the
   // first, which can hang on one odometric link) is still tried where a later visit lies nearer
-  // to a. A registration with exp_scan_min_pairs pairs, a median
-  // pair distance under exp_scan_max_distance_m, exp_scan_min_inlier_share of a's points on the
+  // to a. A registration with exp_scan_min_pairs pairs, a median pair distance under
+  // exp_scan_max_distance_m, exp_scan_min_inlier_share of a's points on the
   // other's walls, walls facing enough ways to fix the pose along them (exp_scan_min_weak_share)
   // and a correction of the map within exp_scan_max_correction_m / _rad becomes a link of its own
   // in the least squares, weighed by what the registration measured (exp_graph_scan_sigma_m,
@@ -236,7 +236,8 @@ struct ExperienceMapConfig {
     v("exp_scan_every", exp_scan_every, "register the stretch around every this-many-th experience");
     v("exp_scan_min_age", exp_scan_min_age, "... with one whose centre was made at least this many experiences before");
     v("exp_scan_radius_m", exp_scan_radius_m, "... and lies within this distance in the map (m)");
-    v("exp_scan_visits", exp_scan_visits, "... with the nearest experience of each of this many earlier visits nearest to it");
+    v("exp_scan_visits", exp_scan_visits,
+      "... with the nearest experience of each of this many earlier visits nearest to it");
     v("exp_scan_min_pairs", exp_scan_min_pairs, "a registration needs this many point pairs");
     v("exp_scan_max_distance_m", exp_scan_max_distance_m, "... their median distance under this (m)");
     v("exp_scan_min_inlier_share", exp_scan_min_inlier_share,
