@@ -178,6 +178,22 @@ TEST(ExperienceMapRestart, AMapFileWithoutTheRestartStateLoadsAsBefore) {
   EXPECT_GT(again.turned_since_hold_rad(), 1e300) << "the heading gate wide open";
   EXPECT_EQ(again.bridge().from_id(), saved.current_id()) << "a bridge started at the current experience";
   EXPECT_EQ(again.recent_scans_size(), 0);
+
+  // A file from before session 69 held one registration (field 26, then singular) and its flag
+  // (27) only when it was kept: the registration loads waiting.
+  proto::ExperienceMap one = saved;
+  one.clear_recent_scans();
+  one.clear_recent_scans_kept();
+  proto::Link* waiting = one.add_recent_scans()->mutable_link();
+  waiting->set_from_id(0);
+  waiting->set_to_id(static_cast<uint32_t>(saved.experiences_size() - 1));
+  waiting->set_d_m(1.0);
+  loaded.Load(one);
+  const proto::ExperienceMap reloaded = loaded.Save();
+  ASSERT_EQ(reloaded.recent_scans_size(), 1);
+  ASSERT_EQ(reloaded.recent_scans_kept_size(), 1);
+  EXPECT_FALSE(reloaded.recent_scans_kept(0));
+  EXPECT_EQ(reloaded.recent_scans(0).link().to_id(), waiting->to_id());
 }
 
 TEST(ExperienceMapRestart, ABrokenRestartStateIsRefusedWhole) {
