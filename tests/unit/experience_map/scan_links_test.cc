@@ -232,14 +232,13 @@ Laps DriveLaps(bool scan_links, const std::function<void(ExperienceMapConfig&)>&
   return run;
 }
 
-// Mean distance of a lap's experiences (the last unless told) from the truth, both relative to the
-// first experience (which the least squares keeps where it is).
-double LapError(const Laps& run, std::optional<int> lap = std::nullopt) {
+// Mean distance of the last lap's experiences from the truth, both relative to the first
+// experience (which the least squares keeps where it is).
+double LapError(const Laps& run) {
   const size_t per_lap = run.truth.size() / static_cast<size_t>(run.laps);
-  const size_t first = per_lap * static_cast<size_t>(lap.value_or(run.laps - 1));
   double sum = 0;
   int n = 0;
-  for (size_t i = first; i < first + per_lap; ++i, ++n) {
+  for (size_t i = run.truth.size() - per_lap; i < run.truth.size(); ++i, ++n) {
     const Experience& e = run.map->experiences()[i];
     const Pose2D truth = Between(run.truth[0], run.truth[i]);
     sum += std::hypot(e.x_m - truth.x, e.y_m - truth.y);
