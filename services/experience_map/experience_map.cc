@@ -97,11 +97,15 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     // row past the widest gate, if they agree within exp_manhattan_recapture_spread_rad over
     // exp_manhattan_recapture_turn_rad of turning, are the heading's drift: taken out at once.
     // Not past exp_manhattan_recapture_max_rad: walls at 45 degrees to the axes are as far from
-    // one axis as from the other.
+    // one axis as from the other. With exp_manhattan_recapture_inside_widest the offsets past the
+    // gate of the moment count too: after a misread turn a wall held weakly (tapered) narrows
+    // the gate again, and a heading 0.15-0.25 rad off then sits between the two gates, never held
+    // while the robot drives on without turning much (AC26, session 69: 0.18 rad for 3,000
+    // frames).
     const int frames = config_.exp_manhattan_recapture_frames;
     if (frames <= 0) return;
-    if (std::abs(offset) <= config_.exp_manhattan_max_offset_rad) {  // the widest gate would hold it
-      offsets_outside_gate_.clear();
+    if (std::abs(offset) <= config_.exp_manhattan_max_offset_rad && !config_.exp_manhattan_recapture_inside_widest) {
+      offsets_outside_gate_.clear();  // the widest gate would hold it
       return;
     }
     offsets_outside_gate_.emplace_back(offset, turned_since_hold_rad_);

@@ -1145,6 +1145,51 @@ TEST(ExperienceMap, HeadingThatDriftedPastTheGateIsTakenBackWhenTheWallsAgreeOnI
                               [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_max_rad = 0.8; }}});
 }
 
+TEST(ExperienceMap, AHeadingBetweenTheGatesIsTakenBackWhenTheWallsAfterItAgree) {
+  // The demo's gates (0.1 rad after a hold, widening 0.1 a radian turned, up to 0.25) and taper. A
+  // quarter turn read 0.18 rad too far (AC26, session 69: 0.17 rad at frame 6,100); then the
+  // robot drives on, turning `turn_per_frame`, and sees walls on the axes: each comes 0.18 off.
+  ExperienceMapConfig config = HeldToWalls();
+  config.exp_manhattan_min_offset_rad = 0.1;
+  config.exp_manhattan_offset_per_rad_turned = 0.1;
+  config.exp_manhattan_max_offset_rad = 0.25;
+  config.exp_manhattan_taper = true;
+  config.exp_manhattan_recapture_frames = 20;
+  config.exp_manhattan_recapture_turn_rad = 0.5;
+  const double noise[] = {0.01, -0.005, 0.0, 0.008, -0.01};
+  struct Result {
+    double error_rad;
+    uint64_t recaptures;
+  };
+  const auto after_misread_turn = [&](bool inside_widest, double turn_per_frame) {
+    ExperienceMapConfig c = config;
+    c.exp_manhattan_recapture_inside_widest = inside_widest;
+    ExperienceMap map(c);
+    for (int i = 0; i < 5; ++i) map.HoldHeading(0.0);  // fixes the axes at 0, the robot on one
+    for (int i = 0; i < 10; ++i) map.Integrate(0.0, kPi / 2 + 0.18, 0.1);  // truly a quarter turn, in 1 s
+    double turned = 0.0;  // truly, since
+    for (int frame = 0; frame < 60; ++frame) {
+      map.Integrate(0.25, turn_per_frame / 0.1, 0.1);
+      turned += turn_per_frame;
+      map.HoldHeading(noise[frame % 5] - turned);  // a wall on an axis, in the robot's frame
+    }
+    return Result{WrapAngle(map.RobotPose().theta - kPi / 2 - turned), map.heading_recaptures()};
+  };
+  // The first wall after the turn is held, tapered to 0.17 of the pull (0.007 rad back), and the
+  // gate narrows to 0.1 again. Without the key, each wall the gate lets in as it widens with the
+  // turning is held as weakly and narrows it again: after 60 frames (1.8 rad) still 0.14 rad off.
+  const Result without = after_misread_turn(false, 0.03);
+  EXPECT_GT(without.error_rad, 0.12);
+  EXPECT_EQ(without.recaptures, 0u);
+  // With it, twenty offsets in a row past the gate that agree, over half a radian of turning, are
+  // the heading's drift: taken out at once.
+  const Result with = after_misread_turn(true, 0.03);
+  EXPECT_LT(std::abs(with.error_rad), 0.01);
+  EXPECT_EQ(with.recaptures, 1u);
+  // Driving on hardly turning (one wall, maybe off the axes): nothing taken, with it as without.
+  EXPECT_EQ(after_misread_turn(true, 0.001).recaptures, 0u);
+}
+
 TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurns) {
   ExperienceMapConfig config = HeldToWalls();
   config.exp_manhattan_min_offset_rad = 0.1;
