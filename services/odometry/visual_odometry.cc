@@ -32,15 +32,25 @@ double SharedShift(double left, double right) {
 // The turn the halves give: the shift they share, except in a steady turn on the spot (the last
 // two frames turns on the spot, `previous` and `before` within `tolerance` px of each other), where
 // halves more than `tolerance` apart give the one within `tolerance` of `previous`
-// (turn_continuity_px; 0 = always the shared shift).
+// (turn_continuity_px; 0 = always the shared shift). Halves sharing no shift right after a turn
+// on the spot give the one within `follow` px of `previous` (turn_follow_px; 0 = off) if it moves
+// as no forward drive moves it.
 double HalvesShift(double left, double right, std::optional<double> previous, std::optional<double> before,
-                   double tolerance) {
+                   double tolerance, double follow) {
+  const double l = previous ? std::abs(left - *previous) : 0.0, r = previous ? std::abs(right - *previous) : 0.0;
   const bool steady_turn = tolerance > 0 && previous && before && std::abs(*previous - *before) <= tolerance;
-  if (steady_turn && std::abs(left - right) > tolerance) {
-    const double l = std::abs(left - *previous), r = std::abs(right - *previous);
-    if (std::min(l, r) <= tolerance) return l <= r ? left : right;
+  if (steady_turn && std::abs(left - right) > tolerance && std::min(l, r) <= tolerance) return l <= r ? left : right;
+  const double shared = SharedShift(left, right);
+  // The turn followed must not itself have jumped from the frame before (a turn's end misread).
+  const bool followable = previous && (!before || std::abs(*previous - *before) <= follow);
+  if (shared == 0 && follow > 0 && followable) {
+    // Driving forward moves the left half's view left (< 0) and the right half's right (> 0), so
+    // only a left half moving right or a right half moving left can be the turn going on.
+    const bool left_turns = left > 0 && l <= follow, right_turns = right < 0 && r <= follow;
+    if (left_turns && (!right_turns || l <= r)) return left;
+    if (right_turns) return right;
   }
-  return SharedShift(left, right);
+  return shared;
 }
 
 // Of the candidates, the one nearest `target` if it is within `tolerance` of it.
@@ -359,7 +369,7 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
     const size_t half = rotation_width / 2;
     const auto left = rotation_shift(0, half), right = rotation_shift(rotation_width - half, half);
     double shared = HalvesShift(left.second, right.second, turning_shift_px_, turning_shift_before_px_,
-                                config_.turn_continuity_px);
+                                config_.turn_continuity_px, config_.turn_follow_px);
     halves_agree = std::abs(left.second - right.second) <= config_.turn_continuity_px;
     if (config_.turn_continuity_agreed_rate && !halves_agree && agreed_turn_shift_px_) {
       const double whole = rotation_shift(0, rotation_width).second;

@@ -64,6 +64,12 @@ struct VisualOdometryConfig {
   // turn on the spot or its halves agree on another rate (a turn's last, partial frame: driving
   // on after it, a half's flow near that rate read as the turn going on).
   bool turn_continuity_agreed_rate = false;
+  // With rotation_from_halves, right after a frame read as a turn on the spot: halves that share
+  // no shift (they move apart, or one stands still) give the half within this many pixels of that
+  // frame's shift, if one is. Where a turn starts in front of a plain wall the halves' matches are
+  // erratic for its first frames, too soon for the steady turn above (it needs two turning frames
+  // within turn_continuity_px), and each frame read as no turn lost a whole frame's turn. 0 = off.
+  double turn_follow_px = 0.0;
   // The rotation profile is smoothed by a moving mean over this many columns each side before it
   // is matched: a wall close by at a slant shows stripes a pixel or two wide (the texture seen
   // edge-on), which a turn of a fraction of a pixel more or less changes column by column.
@@ -107,6 +113,8 @@ struct VisualOdometryConfig {
       "steady turn on the spot, halves this many px apart: the one this near the last shift is the turn (0 = off)");
     v("turn_continuity_agreed_rate", turn_continuity_agreed_rate,
       "a turn on the spot goes on at the rate its halves last agreed on: halves apart take the half or whole crop nearest it");
+    v("turn_follow_px", turn_follow_px,
+      "after a turn on the spot, halves sharing no shift: the one this near that frame's shift is the turn (0 = off)");
     v("edge_shift_reads_no_turn", edge_shift_reads_no_turn,
       "a rotation match at the search's edge (max_shift_px) reads no turn: the least difference lies beyond it");
     v("rotation_profile_smoothing_px", rotation_profile_smoothing_px,
@@ -133,6 +141,8 @@ struct VisualOdometryConfig {
     Require(turn_continuity_px >= 0, "turn_continuity_px", "must be >= 0");
     Require(!turn_continuity_agreed_rate || (rotation_from_halves && turn_continuity_px > 0),
             "turn_continuity_agreed_rate", "needs rotation_from_halves and turn_continuity_px > 0");
+    Require(turn_follow_px >= 0, "turn_follow_px", "must be >= 0");
+    Require(turn_follow_px == 0 || rotation_from_halves, "turn_follow_px", "needs rotation_from_halves");
     Require(rotation_profile_smoothing_px >= 0 && rotation_profile_smoothing_px <= 64, "rotation_profile_smoothing_px",
             "must be 0..64");
   }

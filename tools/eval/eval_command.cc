@@ -256,6 +256,7 @@ void RunOdometry(const OdometryCommandOptions& options, std::ostream& out, std::
           {"heading_rms_rad", r.heading_rms_rad},
           {"final_heading_error_rad", r.final_heading_error_rad},
           {"turn_frames_misread", r.turn_frames_misread},
+          {"straight_frames_misread", r.straight_frames_misread},
           {"turn_error_sum_rad", r.turn_error_sum_rad},
           {"frames_recorded", r.frames_recorded},
           {"frames_differing_from_recorded", r.frames_differing_from_recorded},
@@ -265,10 +266,11 @@ void RunOdometry(const OdometryCommandOptions& options, std::ostream& out, std::
       char line[400];
       std::snprintf(line, sizeof line,
                     "%s: %zu frames; dead reckoning ATE %.3f m (scale %.3f), heading RMS %.3f rad, final heading "
-                    "error %.3f rad; %zu turning frames misread (> 0.03 rad), turn error %.2f rad in all; %zu of %zu "
+                    "error %.3f rad; %zu turning frames misread (> 0.03 rad), %zu straight frames read turning (> 0.03 rad), "
+                    "turn error %.2f rad in all; %zu of %zu "
                     "recorded velocities differ",
                     robot.c_str(), r.frames, r.ate_m, r.scale, r.heading_rms_rad, r.final_heading_error_rad,
-                    r.turn_frames_misread, r.turn_error_sum_rad, r.frames_differing_from_recorded, r.frames_recorded);
+                    r.turn_frames_misread, r.straight_frames_misread, r.turn_error_sum_rad, r.frames_differing_from_recorded, r.frames_recorded);
       out << line << "\n";
     }
   } catch (const CLI::Error&) {

@@ -51,7 +51,7 @@ OdometryReplayResult ReplayOdometry(const sim::WorldMap& world, const sim::SimCo
       const double true_turn = WrapAngle(frame.truth.theta - frames[i - 1].truth.theta);
       const double turn_error = std::abs(v.vrot * dt - true_turn);
       result.turn_error_sum_rad += turn_error;
-      if (std::abs(true_turn) > 0.01 && turn_error > 0.03) ++result.turn_frames_misread;
+      if (turn_error > 0.03) ++(std::abs(true_turn) > 0.01 ? result.turn_frames_misread : result.straight_frames_misread);
     }
     const double heading_error = WrapAngle(pose.theta - (frame.truth.theta - frames[0].truth.theta));
     heading_error2 += heading_error * heading_error;

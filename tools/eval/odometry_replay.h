@@ -37,6 +37,8 @@ struct OdometryReplayResult {
   double final_heading_error_rad = 0.0;
   // Frames turning more than 0.01 rad whose turn read more than 0.03 rad wrong.
   std::size_t turn_frames_misread = 0;
+  // Frames turning at most 0.01 rad whose turn read more than 0.03 rad: turns read where none was.
+  std::size_t straight_frames_misread = 0;
   double turn_error_sum_rad = 0.0;  // sum over all frames of |turn read - true turn|
   // Frames whose velocity differs from the recorded one (by more than 1e-9), of those recorded.
   std::size_t frames_recorded = 0;

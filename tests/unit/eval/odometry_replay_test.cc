@@ -87,6 +87,7 @@ TEST_F(OdometryReplayTest, DeadReckonsTheDemoOdometryOnFramesRenderedAtTheTruth)
   EXPECT_NEAR(r.scale, 1.0, 0.2);
   EXPECT_LT(std::abs(r.final_heading_error_rad), 0.1);
   EXPECT_LE(r.turn_frames_misread, 2u);
+  EXPECT_LE(r.straight_frames_misread, 2u);
   EXPECT_EQ(r.frames_recorded, 0u);
   // The same frames replayed give the same result: rendering and reading are deterministic.
   EXPECT_EQ(ReplayOdometry(world_, sim_.sim, odometry_, frames_).ate_m, r.ate_m);

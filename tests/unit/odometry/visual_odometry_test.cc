@@ -175,6 +175,57 @@ TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
   EXPECT_THROW(negative.Validate(), ConfigError);
 }
 
+TEST(VisualOdometryTest, TurnFollowKeepsATurnsSecondFrameWhereOneHalfMismatches) {
+  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
+  const TwoHalves frame;
+  // Frames of a turn on the spot, both halves `turns` px each; then the halves move by `left` and
+  // `right` px and share no shift (in front of a plain wall, where a turn starts).
+  const auto after_turn = [&](double follow_px, std::vector<int> turns, int left, int right) {
+    VisualOdometryConfig config;
+    config.rotation_from_halves = true;
+    config.subpixel_rotation = true;
+    config.turn_in_place_vrot_radps = 0.12;
+    config.turn_continuity_px = 3;
+    config.turn_follow_px = follow_px;
+    VisualOdometry vo(config);
+    int offset = 400;
+    vo.Update(frame(offset, offset), kDt);
+    for (const int turn : turns) {
+      offset -= turn;
+      EXPECT_NEAR(vo.Update(frame(offset, offset), kDt).vrot * kDt / rad_per_px, turn, 1.0);
+    }
+    return vo.Update(frame(offset - left, offset - right), kDt).vrot * kDt / rad_per_px;
+  };
+  // Turning left: the left half goes on (2 px faster), the right half mismatches 10 px the other way.
+  EXPECT_NEAR(after_turn(0, {20}, 22, -10), 0.0, 1e-9);  // off: the shared shift, none
+  EXPECT_NEAR(after_turn(8, {20}, 22, -10), 22.0, 1.0);
+  EXPECT_NEAR(after_turn(8, {20}, 30, -10), 0.0, 1e-9);  // 10 px off the turn: not followed
+  // Turning right, mirrored: the right half goes on.
+  EXPECT_NEAR(after_turn(8, {-20}, 10, -22), -22.0, 1.0);
+  // A half moving the way driving forward moves it (the left half left, the right half right) is
+  // not followed, however near the turn's shift: the robot driving on at a wall after the turn.
+  EXPECT_NEAR(after_turn(8, {20}, -5, 18), 0.0, 1e-9);
+  EXPECT_NEAR(after_turn(8, {-20}, -18, 5), 0.0, 1e-9);
+  // Without a turn before it, such a frame is no turn.
+  EXPECT_NEAR(after_turn(8, {0}, 22, -10), 0.0, 1e-9);
+  // A turn that jumped from the frame before (a turn's slower last frame, then a misread one) is
+  // not followed; one that went on at its rate is.
+  EXPECT_NEAR(after_turn(8, {10, 30}, 30, -10), 0.0, 1e-9);
+  EXPECT_NEAR(after_turn(8, {24, 30}, 30, -10), 30.0, 1.0);
+  VisualOdometryConfig negative;
+  negative.turn_follow_px = -1;
+  negative.rotation_from_halves = true;
+  EXPECT_THROW(negative.Validate(), ConfigError);
+  VisualOdometryConfig whole;
+  whole.turn_follow_px = 8;  // without rotation_from_halves
+  try {
+    whole.Validate();
+    FAIL() << "accepted turn_follow_px without halves";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.key(), "turn_follow_px");
+  }
+}
+
 TEST(VisualOdometryTest, AMatchAtTheSearchsEdgeReadsNoTurnWhenConfigured) {
   const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const TwoHalves frame;
