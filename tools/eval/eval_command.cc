@@ -321,6 +321,15 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
     json["profiles_kept"] = r.profiles_kept;
     json["walls_axes"] = r.axes_fixed ? nlohmann::json{{"frame", r.axes_fixed->frame}, {"rad", r.axes_fixed->rad}}
                                       : nlohmann::json(nullptr);
+    nlohmann::json recaptures = nlohmann::json::array();
+    std::size_t toward_truth = 0;
+    for (const RecaptureError& e : JudgeRecaptures(r.heading_recaptures, r.seen, map_origin)) {
+      recaptures.push_back({{"frame", e.frame}, {"taken_rad", e.taken_rad}, {"error_before_rad", e.error_before_rad},
+                            {"error_after_rad", e.error_after_rad}});
+      if (std::abs(e.error_after_rad) < std::abs(e.error_before_rad)) ++toward_truth;
+    }
+    json["heading_recaptures"] = {
+        {"count", r.heading_recaptures.size()}, {"toward_truth", toward_truth}, {"against_truth", recaptures}};
     nlohmann::json judged = nlohmann::json::array();
     for (const ScanLinkError& e : JudgeScanLinks(r.scan_links, demo::ExperienceGroundTruth(r.seen)))
       judged.push_back({{"from", e.from_id}, {"to", e.to_id}, {"position_m", e.position_m}, {"heading_rad", e.heading_rad}});
@@ -351,7 +360,8 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
         << json["loop_closures"] << " loop closures (" << number(json["loop_closure_precision"], "%.3f")
         << " right); coverage " << number(json["coverage"], "%.4f") << ", map precision "
         << number(json["map_precision"], "%.4f") << ", ATE " << number(json["ate_m"], "%.3f") << " m (odometry "
-        << number(json["ate_odometry_m"], "%.3f") << " m); ";
+        << number(json["ate_odometry_m"], "%.3f") << " m); " << r.heading_recaptures.size()
+        << " heading recaptures (" << toward_truth << " toward the truth); ";
     if (options.recorded_actions)
       out << "recorded actions applied\n";
     else

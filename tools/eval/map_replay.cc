@@ -82,8 +82,10 @@ MapReplayResult ReplayMap(const RecordedRun& run, const MapReplayConfig& config)
     // The experience-map service's (ExperienceMapNode::Apply; an action it would refuse whole is
     // skipped).
     if (action.dt_s > config.experience_map.max_dt_s) continue;
-    if (experience_map::ApplyActionMessage(map, action).axes_fixed)
-      result.axes_fixed = MapReplayResult::AxesFixed{frame.frame_seq, *map.manhattan_axes()};
+    const experience_map::AppliedAction applied = experience_map::ApplyActionMessage(map, action);
+    if (applied.axes_fixed) result.axes_fixed = MapReplayResult::AxesFixed{frame.frame_seq, *map.manhattan_axes()};
+    if (applied.heading_recaptured_rad)
+      result.heading_recaptures.push_back({frame.frame_seq, *applied.heading_recaptured_rad});
     const Pose2D robot = map.RobotPose();
     seen.experience_poses.push_back({frame.frame_seq, frame.stamp_ns, robot.x, robot.y, robot.theta});
     uint32_t current = pose_cells::kNoExperience;
@@ -139,6 +141,27 @@ std::vector<ScanLinkError> JudgeScanLinks(std::span<const experience_map::ScanLi
     const Pose2D measured = s.link.pose();
     out.push_back({s.link.from_id, s.link.to_id, std::hypot(measured.x - truth.x, measured.y - truth.y),
                    std::abs(WrapAngle(measured.theta - truth.theta))});
+  }
+  return out;
+}
+
+std::vector<RecaptureError> JudgeRecaptures(std::span<const MapReplayResult::Recapture> recaptures,
+                                            const demo::DemoObservations& seen, const Pose2D& map_origin) {
+  std::unordered_map<uint64_t, double> truth;
+  for (const demo::FramePose& p : seen.ground_truth) truth[p.frame_seq] = p.theta;
+  const auto error = [&](const demo::FramePose& map_pose) -> std::optional<double> {
+    const auto t = truth.find(map_pose.frame_seq);
+    if (t == truth.end()) return std::nullopt;
+    return WrapAngle(map_origin.theta + map_pose.theta - t->second);
+  };
+  std::vector<RecaptureError> out;
+  const std::vector<demo::FramePose>& poses = seen.experience_poses;
+  for (const MapReplayResult::Recapture& r : recaptures) {
+    const auto at = std::find_if(poses.begin(), poses.end(),
+                                 [&r](const demo::FramePose& p) { return p.frame_seq == r.frame; });
+    if (at == poses.end() || at == poses.begin()) continue;
+    const std::optional<double> before = error(*(at - 1)), after = error(*at);
+    if (before && after) out.push_back({r.frame, r.taken_rad, *before, *after});
   }
   return out;
 }

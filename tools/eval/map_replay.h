@@ -54,6 +54,13 @@ struct MapReplayResult {
     double rad = 0.0;
   };
   std::optional<AxesFixed> axes_fixed;
+  // experience_map.exp_manhattan_recapture_frames: each heading recapture, its frame and the
+  // heading it took out (rad).
+  struct Recapture {
+    uint64_t frame = 0;
+    double taken_rad = 0.0;
+  };
+  std::vector<Recapture> heading_recaptures;
   // experience_map.exp_scan_links: registrations tried, and the links kept (the newer
   // experience's pose in the older's, as measured).
   std::size_t scan_registrations = 0;
@@ -69,6 +76,18 @@ struct ScanLinkError {
 // The links whose two ends have a ground-truth pose, in the map's order.
 std::vector<ScanLinkError> JudgeScanLinks(std::span<const experience_map::ScanLink> links,
                                           const std::map<uint32_t, Pose2D>& experience_truth);
+
+// A heading recapture judged against the truth: the robot's heading error in the map (placed in
+// the world at map_origin, demo::MapOrigin) on the replayed frame before it and on its own frame.
+// It took the heading toward the truth when the error after is the smaller.
+struct RecaptureError {
+  uint64_t frame = 0;
+  double taken_rad = 0.0;
+  double error_before_rad = 0.0, error_after_rad = 0.0;
+};
+// The recaptures whose two frames have a map pose and a ground-truth pose, in order.
+std::vector<RecaptureError> JudgeRecaptures(std::span<const MapReplayResult::Recapture> recaptures,
+                                            const demo::DemoObservations& seen, const Pose2D& map_origin);
 
 // Throws std::invalid_argument when the run has no frame to replay (no velocity or view, or with
 // recorded_actions no action) or a frame's message is one the service would refuse.

@@ -213,6 +213,31 @@ TEST(JudgeScanLinks, MeasuresEachLinkAgainstItsEndsTrueRelativePose) {
   EXPECT_NEAR(judged[1].heading_rad, 0.1, 1e-12);
 }
 
+TEST(JudgeRecaptures, MeasuresTheHeadingErrorOnTheFramesBeforeAndAtEach) {
+  // The map frame faces 0.5 rad left of the world's. Frame 11 turns a right heading 0.3 rad off,
+  // frame 12 takes it back; frame 10 has no frame before it and frame 13 no truth: both are left
+  // out.
+  demo::DemoObservations seen;
+  const double truth[] = {1.0, 1.2, 1.4, 1.6};
+  const double error[] = {0.0, 0.3, 0.0, -0.2};
+  for (int i = 0; i < 4; ++i) {
+    const uint64_t frame = 10 + static_cast<uint64_t>(i);
+    if (i < 3) seen.ground_truth.push_back({frame, 0, 0.0, 0.0, truth[i]});
+    seen.experience_poses.push_back({frame, 0, 0.0, 0.0, truth[i] - 0.5 + error[i]});
+  }
+  const std::vector<MapReplayResult::Recapture> recaptures = {{10, 0.1}, {11, -0.3}, {12, 0.3}, {13, 0.1}};
+  const Pose2D map_origin{3.0, -2.0, 0.5};
+  const std::vector<RecaptureError> judged = JudgeRecaptures(recaptures, seen, map_origin);
+  ASSERT_EQ(judged.size(), 2u);
+  EXPECT_EQ(judged[0].frame, 11u);
+  EXPECT_NEAR(judged[0].error_before_rad, 0.0, 1e-12);
+  EXPECT_NEAR(judged[0].error_after_rad, 0.3, 1e-12);
+  EXPECT_EQ(judged[1].frame, 12u);
+  EXPECT_NEAR(judged[1].taken_rad, 0.3, 1e-12);
+  EXPECT_NEAR(judged[1].error_before_rad, 0.3, 1e-12);
+  EXPECT_NEAR(judged[1].error_after_rad, 0.0, 1e-12);
+}
+
 TEST_F(MapReplayTest, EvalMapReadsTheOdometryAgainOnFramesRenderedAtTheTruth) {
   // The recorded odometry here is the truth itself; read again from the frames rendered where the
   // robot stood, it is the camera's, which is not (and cannot follow the square's quarter turns in
@@ -243,6 +268,9 @@ TEST_F(MapReplayTest, EvalMapReplaysARecordingAndJudgesItAsTheDemoDoes) {
                           "loop_closure_precision", "ate_m", "ate_odometry_m", "grid"})
     EXPECT_TRUE(json.contains(key)) << key;
   EXPECT_EQ(json["scan_links"]["against_truth"].size(), json["scan_links"]["kept"].get<size_t>());
+  // The odometry is the truth: the heading never drifts for a recapture to take back.
+  EXPECT_EQ(json["heading_recaptures"]["count"].get<size_t>(), 0u);
+  EXPECT_TRUE(json["heading_recaptures"]["against_truth"].empty());
   // The walls' axes: fixed by the first exp_manhattan_reference_frames wall directions (all agree).
   int walls = 0;
   uint64_t fixed_at = 0;
