@@ -266,11 +266,11 @@ void RunOdometry(const OdometryCommandOptions& options, std::ostream& out, std::
       char line[400];
       std::snprintf(line, sizeof line,
                     "%s: %zu frames; dead reckoning ATE %.3f m (scale %.3f), heading RMS %.3f rad, final heading "
-                    "error %.3f rad; %zu turning frames misread (> 0.03 rad), %zu straight frames read turning (> 0.03 rad), "
-                    "turn error %.2f rad in all; %zu of %zu "
-                    "recorded velocities differ",
+                    "error %.3f rad; %zu turning frames misread (> 0.03 rad), %zu straight frames read turning "
+                    "(> 0.03 rad), turn error %.2f rad in all; %zu of %zu recorded velocities differ",
                     robot.c_str(), r.frames, r.ate_m, r.scale, r.heading_rms_rad, r.final_heading_error_rad,
-                    r.turn_frames_misread, r.straight_frames_misread, r.turn_error_sum_rad, r.frames_differing_from_recorded, r.frames_recorded);
+                    r.turn_frames_misread, r.straight_frames_misread, r.turn_error_sum_rad,
+                    r.frames_differing_from_recorded, r.frames_recorded);
       out << line << "\n";
     }
   } catch (const CLI::Error&) {
@@ -326,7 +326,7 @@ void RunMap(const MapCommandOptions& options, std::ostream& out, std::ostream& e
     for (const RecaptureError& e : JudgeRecaptures(r.heading_recaptures, r.seen, map_origin)) {
       recaptures.push_back({{"frame", e.frame}, {"taken_rad", e.taken_rad}, {"error_before_rad", e.error_before_rad},
                             {"error_after_rad", e.error_after_rad}});
-      if (std::abs(e.error_after_rad) < std::abs(e.error_before_rad)) ++toward_truth;
+      if (e.TowardTruth()) ++toward_truth;
     }
     json["heading_recaptures"] = {
         {"count", r.heading_recaptures.size()}, {"toward_truth", toward_truth}, {"against_truth", recaptures}};

@@ -15,6 +15,7 @@
 //
 // Pure and deterministic: the caller reads the recording and the config.
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -79,11 +80,12 @@ std::vector<ScanLinkError> JudgeScanLinks(std::span<const experience_map::ScanLi
 
 // A heading recapture judged against the truth: the robot's heading error in the map (placed in
 // the world at map_origin, demo::MapOrigin) on the replayed frame before it and on its own frame.
-// It took the heading toward the truth when the error after is the smaller.
 struct RecaptureError {
   uint64_t frame = 0;
   double taken_rad = 0.0;
   double error_before_rad = 0.0, error_after_rad = 0.0;
+  // It took the heading toward the truth: the error after is the smaller.
+  bool TowardTruth() const { return std::abs(error_after_rad) < std::abs(error_before_rad); }
 };
 // The recaptures whose two frames have a map pose and a ground-truth pose, in order.
 std::vector<RecaptureError> JudgeRecaptures(std::span<const MapReplayResult::Recapture> recaptures,

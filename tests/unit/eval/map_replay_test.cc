@@ -23,6 +23,7 @@
 #include "services/pose_cells/pose_cell_network.h"
 #include "tests/support/child_process.h"
 #include "tests/unit/eval/eval_test_files.h"
+#include "tools/demo/demo_metrics.h"
 #include "tools/eval/eval_command.h"
 #include "tools/sim/sim_node.h"
 #include "tools/sim/world_map.h"
@@ -232,10 +233,35 @@ TEST(JudgeRecaptures, MeasuresTheHeadingErrorOnTheFramesBeforeAndAtEach) {
   EXPECT_EQ(judged[0].frame, 11u);
   EXPECT_NEAR(judged[0].error_before_rad, 0.0, 1e-12);
   EXPECT_NEAR(judged[0].error_after_rad, 0.3, 1e-12);
+  EXPECT_FALSE(judged[0].TowardTruth());
   EXPECT_EQ(judged[1].frame, 12u);
   EXPECT_NEAR(judged[1].taken_rad, 0.3, 1e-12);
   EXPECT_NEAR(judged[1].error_before_rad, 0.3, 1e-12);
   EXPECT_NEAR(judged[1].error_after_rad, 0.0, 1e-12);
+  EXPECT_TRUE(judged[1].TowardTruth());
+}
+
+TEST_F(MapReplayTest, RecordsEachHeadingRecaptureAndJudgesItTowardTheTruth) {
+  // The first lap's second quarter turn read 0.3 rad too far (one frame), so the third side's
+  // walls come 0.3 rad off the axes, past the hold's widest gate; five of them in a row take it
+  // back (no turning asked of them here). The views of the first lap are all new: no recognition
+  // corrects it first.
+  MapReplayConfig config = config_;
+  config.experience_map.map.exp_manhattan_recapture_frames = 5;
+  config.experience_map.map.exp_manhattan_recapture_turn_rad = 0.0;
+  RecordedRun drifted = run_;
+  const int misread = 2 * (kSideFrames + kTurnFrames) - 1;
+  drifted.frames[misread].velocity->vrot_radps += 0.3 / kDt;
+  const MapReplayResult r = ReplayMap(drifted, config);
+  ASSERT_FALSE(r.heading_recaptures.empty());
+  EXPECT_GT(r.heading_recaptures[0].frame, static_cast<uint64_t>(misread));
+  EXPECT_NEAR(r.heading_recaptures[0].taken_rad, 0.3, 0.05);
+  const Pose2D origin =
+      demo::MapOrigin(*drifted.frames[0].truth, config.experience_map.map.exp_initial_em_deg * std::numbers::pi / 180);
+  const std::vector<RecaptureError> judged = JudgeRecaptures(r.heading_recaptures, r.seen, origin);
+  ASSERT_FALSE(judged.empty());
+  EXPECT_NEAR(judged[0].error_before_rad, 0.3, 0.05);
+  EXPECT_TRUE(judged[0].TowardTruth());
 }
 
 TEST_F(MapReplayTest, EvalMapReadsTheOdometryAgainOnFramesRenderedAtTheTruth) {
