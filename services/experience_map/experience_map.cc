@@ -31,6 +31,9 @@ std::string Id(uint32_t id) { return id == kNoExperience ? std::string("none") :
 // exp_scan_links: floor-boundary points are kept one per cell of this size.
 const ScanRegistrationOptions kScanRegistration;
 
+// exp_manhattan_recapture_one_axis_turn_rad: offsets each axis must give to count as both axes'.
+constexpr long kRecaptureFromEachAxis = 2;
+
 int64_t ScanCell(const Eigen::Vector2f& p) {
   const auto cell = [](float v) { return static_cast<int64_t>(std::floor(v / kScanRegistration.cell_m)); };
   return (cell(p.x()) << 32) ^ (cell(p.y()) & 0xffffffff);
@@ -108,17 +111,30 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
       offsets_outside_gate_.clear();  // the widest gate would hold it
       return;
     }
-    offsets_outside_gate_.emplace_back(offset, turned_since_hold_rad_);
+    const long quarter_turns = std::lround((direction - *manhattan_axes_ - offset) / (kPi / 2.0));
+    offsets_outside_gate_.push_back({offset, turned_since_hold_rad_, static_cast<int>(quarter_turns & 1)});
     if (offsets_outside_gate_.size() > static_cast<size_t>(frames)) offsets_outside_gate_.pop_front();
-    if (offsets_outside_gate_.size() < static_cast<size_t>(frames) ||
-        turned_since_hold_rad_ - offsets_outside_gate_.front().second < config_.exp_manhattan_recapture_turn_rad)
+    const double turned = turned_since_hold_rad_ - offsets_outside_gate_.front().turned_rad;
+    if (offsets_outside_gate_.size() < static_cast<size_t>(frames) || turned < config_.exp_manhattan_recapture_turn_rad)
       return;
     QuarterTurnMean offsets;
-    for (const auto& [o, turned] : offsets_outside_gate_) offsets.Add(o);
+    for (const OutsideGate& o : offsets_outside_gate_) offsets.Add(o.offset_rad);
     const double mean = offsets.Mean();
     if (std::abs(mean) > config_.exp_manhattan_recapture_max_rad) return;
-    for (const auto& [o, turned] : offsets_outside_gate_)
-      if (std::abs(std::remainder(o - mean, kPi / 2.0)) > config_.exp_manhattan_recapture_spread_rad) return;
+    for (const OutsideGate& o : offsets_outside_gate_)
+      if (std::abs(std::remainder(o.offset_rad - mean, kPi / 2.0)) > config_.exp_manhattan_recapture_spread_rad) return;
+    // A drift puts every wall the same offset off its axis. Over a wide turn the camera faces walls
+    // of both axes, so offsets of one axis alone are more likely one wall off the axes seen again
+    // and again: of the 8 recaptures in 54 live runs (session 73), the 4 wrong ones came over
+    // 2.1-6.4 rad of turning from walls of one axis; the right ones over 0.5-0.7 rad, or 2.0 rad
+    // from both axes (6 and 14 offsets).
+    if (config_.exp_manhattan_recapture_one_axis_turn_rad > 0 &&
+        turned > config_.exp_manhattan_recapture_one_axis_turn_rad) {
+      const auto axis1 = std::count_if(offsets_outside_gate_.begin(), offsets_outside_gate_.end(),
+                                       [](const OutsideGate& o) { return o.axis == 1; });
+      const auto axis0 = static_cast<long>(offsets_outside_gate_.size()) - axis1;
+      if (std::min<long>(axis0, axis1) < kRecaptureFromEachAxis) return;
+    }
     accum_facing_ = WrapAngle(accum_facing_ - mean);
     ++heading_recaptures_;
   } else {
@@ -827,9 +843,10 @@ proto::ExperienceMap ExperienceMap::Save() const {
   m.set_pose_cells_current_id(pose_cells_current_.value_or(0));
   m.set_driven_since_recognition_m(driven_since_recognition_m_);
   m.set_turned_since_hold_rad(turned_since_hold_rad_);
-  for (const auto& [offset, turned] : offsets_outside_gate_) {
-    m.add_outside_gate_offset_rad(offset);
-    m.add_outside_gate_turned_rad(turned);
+  for (const OutsideGate& o : offsets_outside_gate_) {
+    m.add_outside_gate_offset_rad(o.offset_rad);
+    m.add_outside_gate_turned_rad(o.turned_rad);
+    m.add_outside_gate_axis(static_cast<uint32_t>(o.axis));
   }
   proto::Bridge* bridge = m.mutable_bridge();
   bridge->set_from_id(bridge_from_);
@@ -888,8 +905,10 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
       !std::all_of(m.outside_gate_offset_rad().begin(), m.outside_gate_offset_rad().end(),
                    [](double v) { return std::isfinite(v); }) ||
       !std::all_of(m.outside_gate_turned_rad().begin(), m.outside_gate_turned_rad().end(),
-                   [](double v) { return v >= 0; })) {
-    Reject("saved wall offsets past the heading gate are not finite pairs");
+                   [](double v) { return v >= 0; }) ||
+      (m.outside_gate_axis_size() != 0 && m.outside_gate_axis_size() != m.outside_gate_offset_rad_size()) ||
+      !std::all_of(m.outside_gate_axis().begin(), m.outside_gate_axis().end(), [](uint32_t a) { return a <= 1; })) {
+    Reject("saved wall offsets past the heading gate are not finite pairs, each with its axis (0 or 1)");
   }
   if (m.frames_since_graph() > static_cast<uint32_t>(std::numeric_limits<int>::max())) {
     Reject("saved frames since the least-squares correction out of range");
@@ -975,7 +994,8 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
       m.has_turned_since_hold_rad() ? m.turned_since_hold_rad() : std::numeric_limits<double>::max();
   offsets_outside_gate_.clear();
   for (int i = 0; i < m.outside_gate_offset_rad_size(); ++i)
-    offsets_outside_gate_.emplace_back(m.outside_gate_offset_rad(i), m.outside_gate_turned_rad(i));
+    offsets_outside_gate_.push_back({m.outside_gate_offset_rad(i), m.outside_gate_turned_rad(i),
+                                     m.outside_gate_axis_size() ? static_cast<int>(m.outside_gate_axis(i)) : 0});
   pose_cells_current_ = m.has_pose_cells_current() ? std::optional(m.pose_cells_current_id()) : std::nullopt;
   driven_since_recognition_m_ = m.driven_since_recognition_m();
   if (m.has_bridge()) {

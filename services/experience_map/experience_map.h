@@ -280,8 +280,14 @@ class ExperienceMap {
   // A map saved without it (an older file) loads with the gate wide open.
   double turned_since_hold_rad_ = 0.0;
   // exp_manhattan_recapture_frames: the wall directions' offsets from the axes since the last hold
-  // (at most that many, the latest), each with turned_since_hold_rad_ when it came.
-  std::deque<std::pair<double, double>> offsets_outside_gate_;
+  // (at most that many, the latest), each with turned_since_hold_rad_ when it came and the axis (0
+  // or 1: which of the two perpendicular ones) it is off.
+  struct OutsideGate {
+    double offset_rad;
+    double turned_rad;
+    int axis;
+  };
+  std::deque<OutsideGate> offsets_outside_gate_;
   // exp_recognition_max_jump_m: metres driven since the last recognition taken (or the start).
   double driven_since_recognition_m_ = 0.0;
   std::optional<uint32_t> pose_cells_current_;

@@ -113,11 +113,14 @@ struct ExperienceMapConfig {
   // A heading that drifted past exp_manhattan_max_offset_rad, taken back when this many wall
   // directions in a row agree on the drift (ExperienceMap::HoldHeading has the rule). 0 = off.
   // With exp_manhattan_recapture_inside_widest, a heading past the gate of the moment as well.
+  // With exp_manhattan_recapture_one_axis_turn_rad > 0, offsets that came over more turning than
+  // that count only if walls of both axes gave some of them.
   int exp_manhattan_recapture_frames = 0;
   double exp_manhattan_recapture_spread_rad = 0.05;
   double exp_manhattan_recapture_turn_rad = 1.0;
   double exp_manhattan_recapture_max_rad = 0.5;
   bool exp_manhattan_recapture_inside_widest = false;
+  double exp_manhattan_recapture_one_axis_turn_rad = 0.0;
   // With exp_graph_optimisation: each experience's first wall direction holds its facing to the
   // axes in the least-squares correction with this uncertainty (0: only the robot is held). An
   // experience given its wall direction calls for a correction, as a closure does (at most one
@@ -231,6 +234,9 @@ struct ExperienceMapConfig {
       "the largest drift taken out so (rad)");
     v("exp_manhattan_recapture_inside_widest", exp_manhattan_recapture_inside_widest,
       "wall directions past the gate of the moment count toward a recapture, not only those past the widest");
+    v("exp_manhattan_recapture_one_axis_turn_rad", exp_manhattan_recapture_one_axis_turn_rad,
+      "> 0: offsets that came over more turning than this recapture only if walls of both axes gave "
+      "at least two of them (rad)");
     v("exp_manhattan_sigma_rad", exp_manhattan_sigma_rad,
       "> 0, with exp_graph_optimisation: uncertainty of the experiences' wall directions in the least-squares correction (rad)");
     v("exp_scan_links", exp_scan_links,
@@ -309,6 +315,8 @@ struct ExperienceMapConfig {
     Require(std::isfinite(exp_manhattan_recapture_max_rad) && exp_manhattan_recapture_max_rad > 0 &&
                 exp_manhattan_recapture_max_rad < M_PI / 4,
             "exp_manhattan_recapture_max_rad", "must be in (0, pi/4)");
+    Require(std::isfinite(exp_manhattan_recapture_one_axis_turn_rad) && exp_manhattan_recapture_one_axis_turn_rad >= 0,
+            "exp_manhattan_recapture_one_axis_turn_rad", "must be >= 0");
     Require(std::isfinite(exp_manhattan_gain) && exp_manhattan_gain > 0 && exp_manhattan_gain <= 1,
             "exp_manhattan_gain", "must be in (0, 1]");
     Require(std::isfinite(exp_manhattan_sigma_rad) && exp_manhattan_sigma_rad >= 0, "exp_manhattan_sigma_rad",

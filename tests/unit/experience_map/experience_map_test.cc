@@ -1190,6 +1190,59 @@ TEST(ExperienceMap, AHeadingBetweenTheGatesIsTakenBackWhenTheWallsAfterItAgree) 
   EXPECT_EQ(after_misread_turn(true, 0.001).recaptures, 0u);
 }
 
+TEST(ExperienceMap, OneWallOffTheAxesSeenOverAWideTurnIsNotTakenForDrift) {
+  // The demo's gates and recapture. The heading is right; the robot turns on the spot, 0.15 rad a
+  // frame, and sees walls in the map's directions `seen(frame)` (0 and pi/2: the two axes).
+  ExperienceMapConfig config = HeldToWalls();
+  config.exp_manhattan_min_offset_rad = 0.1;
+  config.exp_manhattan_offset_per_rad_turned = 0.1;
+  config.exp_manhattan_max_offset_rad = 0.25;
+  config.exp_manhattan_taper = true;
+  config.exp_manhattan_recapture_frames = 20;
+  config.exp_manhattan_recapture_turn_rad = 0.5;
+  config.exp_manhattan_recapture_inside_widest = true;
+  const double noise[] = {0.01, -0.005, 0.0, 0.008, -0.01};
+  struct Result {
+    double error_rad;
+    uint64_t recaptures;
+  };
+  const auto spin = [&](double one_axis_turn_rad, double turn_per_frame, auto seen, double drift_rad) {
+    ExperienceMapConfig c = config;
+    c.exp_manhattan_recapture_one_axis_turn_rad = one_axis_turn_rad;
+    ExperienceMap map(c);
+    for (int i = 0; i < 5; ++i) map.HoldHeading(0.0);  // fixes the axes at 0
+    map.Integrate(0.0, drift_rad, 1.0);                 // a turn the robot did not make
+    double truly = 0.0;
+    for (int frame = 0; frame < 30; ++frame) {
+      map.Integrate(0.0, turn_per_frame, 1.0);
+      truly += turn_per_frame;
+      map.HoldHeading(seen(frame) + noise[frame % 5] - truly);  // in the robot's frame
+    }
+    return Result{WrapAngle(map.RobotPose().theta - truly), map.heading_recaptures()};
+  };
+  // One wall 0.3 rad off the axes, seen again and again over 4.5 rad of turning (AG3, session 73:
+  // 0.26 rad taken out of a right heading over 6.4 rad). Without the key it is taken for drift.
+  const auto one_wall = [](int) { return 0.3; };
+  const Result taken = spin(0.0, 0.15, one_wall, 0.0);
+  EXPECT_EQ(taken.recaptures, 1u);
+  EXPECT_NEAR(taken.error_rad, -0.3, 0.02);
+  const Result kept = spin(kPi / 2, 0.15, one_wall, 0.0);
+  EXPECT_EQ(kept.recaptures, 0u);
+  EXPECT_NEAR(kept.error_rad, 0.0, 1e-9);
+  // A heading 0.3 rad off: over the same turn walls of both axes come 0.3 off. Taken back.
+  const auto both_axes = [](int frame) { return frame % 3 ? 0.0 : kPi / 2; };
+  const Result both = spin(kPi / 2, 0.15, both_axes, 0.3);
+  EXPECT_EQ(both.recaptures, 1u);
+  EXPECT_LT(std::abs(both.error_rad), 0.02);
+  // ... and over a narrower turn (1.2 rad) one axis's walls are enough, as before.
+  const Result narrow = spin(kPi / 2, 0.04, [](int) { return 0.0; }, 0.3);
+  EXPECT_EQ(narrow.recaptures, 1u);
+  EXPECT_LT(std::abs(narrow.error_rad), 0.02);
+
+  ExpectKeysRefused(config, {{"exp_manhattan_recapture_one_axis_turn_rad",
+                              [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_one_axis_turn_rad = -1; }}});
+}
+
 TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurns) {
   ExperienceMapConfig config = HeldToWalls();
   config.exp_manhattan_min_offset_rad = 0.1;

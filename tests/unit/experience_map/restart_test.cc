@@ -201,7 +201,7 @@ TEST(ExperienceMapRestart, ABrokenRestartStateIsRefusedWhole) {
   ExperienceMap loaded(DemoConfig());
   loaded.Load(good);
   const std::string before = loaded.Save().SerializeAsString();
-  std::vector<proto::ExperienceMap> broken(7, good);
+  std::vector<proto::ExperienceMap> broken(8, good);
   broken[0].set_turned_since_hold_rad(-1.0);
   broken[1].add_outside_gate_offset_rad(0.4);  // without its turn
   broken[2].mutable_bridge()->set_from_id(100000);
@@ -209,6 +209,10 @@ TEST(ExperienceMapRestart, ABrokenRestartStateIsRefusedWhole) {
   broken[4].add_recent_scans()->mutable_link()->set_to_id(100000);
   broken[5].set_frames_since_graph(0xffffffffu);
   broken[6].add_recent_scans_kept(true);  // a flag without its registration
+  broken[7].add_outside_gate_offset_rad(0.4);
+  broken[7].add_outside_gate_turned_rad(0.1);
+  broken[7].clear_outside_gate_axis();
+  for (int i = 0; i < broken[7].outside_gate_offset_rad_size(); ++i) broken[7].add_outside_gate_axis(i == 0 ? 2 : 0);
   for (size_t i = 0; i < broken.size(); ++i) {
     EXPECT_THROW(loaded.Load(broken[i]), std::invalid_argument) << i;
     EXPECT_EQ(loaded.Save().SerializeAsString(), before) << "a refused load changes nothing (" << i << ")";
