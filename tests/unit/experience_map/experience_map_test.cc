@@ -1145,22 +1145,32 @@ TEST(ExperienceMap, HeadingThatDriftedPastTheGateIsTakenBackWhenTheWallsAgreeOnI
                               [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_max_rad = 0.8; }}});
 }
 
+// The demo's heading hold: gates 0.1 rad after a hold, widening 0.1 a radian turned, up to 0.25,
+// tapered; twenty offsets past the gate of the moment over half a radian recapture the heading.
+ExperienceMapConfig DemoHeadingHold() {
+  ExperienceMapConfig c = HeldToWalls();
+  c.exp_manhattan_min_offset_rad = 0.1;
+  c.exp_manhattan_offset_per_rad_turned = 0.1;
+  c.exp_manhattan_max_offset_rad = 0.25;
+  c.exp_manhattan_taper = true;
+  c.exp_manhattan_recapture_frames = 20;
+  c.exp_manhattan_recapture_turn_rad = 0.5;
+  c.exp_manhattan_recapture_inside_widest = true;
+  return c;
+}
+
+// The robot's heading error in the map after a scene, and the recaptures it took.
+struct HeadingResult {
+  double error_rad;
+  uint64_t recaptures;
+};
+
 TEST(ExperienceMap, AHeadingBetweenTheGatesIsTakenBackWhenTheWallsAfterItAgree) {
-  // The demo's gates (0.1 rad after a hold, widening 0.1 a radian turned, up to 0.25) and taper. A
-  // quarter turn read 0.18 rad too far (AC26, session 69: 0.17 rad at frame 6,100); then the
-  // robot drives on, turning `turn_per_frame`, and sees walls on the axes: each comes 0.18 off.
-  ExperienceMapConfig config = HeldToWalls();
-  config.exp_manhattan_min_offset_rad = 0.1;
-  config.exp_manhattan_offset_per_rad_turned = 0.1;
-  config.exp_manhattan_max_offset_rad = 0.25;
-  config.exp_manhattan_taper = true;
-  config.exp_manhattan_recapture_frames = 20;
-  config.exp_manhattan_recapture_turn_rad = 0.5;
+  // The demo's heading hold. A quarter turn read 0.18 rad too far (AC26, session 69: 0.17 rad at
+  // frame 6,100); then the robot drives on, turning `turn_per_frame`, and sees walls on the axes:
+  // each comes 0.18 off.
+  const ExperienceMapConfig config = DemoHeadingHold();
   const double noise[] = {0.01, -0.005, 0.0, 0.008, -0.01};
-  struct Result {
-    double error_rad;
-    uint64_t recaptures;
-  };
   const auto after_misread_turn = [&](bool inside_widest, double turn_per_frame) {
     ExperienceMapConfig c = config;
     c.exp_manhattan_recapture_inside_widest = inside_widest;
@@ -1173,17 +1183,17 @@ TEST(ExperienceMap, AHeadingBetweenTheGatesIsTakenBackWhenTheWallsAfterItAgree) 
       turned += turn_per_frame;
       map.HoldHeading(noise[frame % 5] - turned);  // a wall on an axis, in the robot's frame
     }
-    return Result{WrapAngle(map.RobotPose().theta - kPi / 2 - turned), map.heading_recaptures()};
+    return HeadingResult{WrapAngle(map.RobotPose().theta - kPi / 2 - turned), map.heading_recaptures()};
   };
   // The first wall after the turn is held, tapered to 0.17 of the pull (0.007 rad back), and the
   // gate narrows to 0.1 again. Without the key, each wall the gate lets in as it widens with the
   // turning is held as weakly and narrows it again: after 60 frames (1.8 rad) still 0.14 rad off.
-  const Result without = after_misread_turn(false, 0.03);
+  const HeadingResult without = after_misread_turn(false, 0.03);
   EXPECT_GT(without.error_rad, 0.12);
   EXPECT_EQ(without.recaptures, 0u);
   // With it, twenty offsets in a row past the gate that agree, over half a radian of turning, are
   // the heading's drift: taken out at once.
-  const Result with = after_misread_turn(true, 0.03);
+  const HeadingResult with = after_misread_turn(true, 0.03);
   EXPECT_LT(std::abs(with.error_rad), 0.01);
   EXPECT_EQ(with.recaptures, 1u);
   // Driving on hardly turning (one wall, maybe off the axes): nothing taken, with it as without.
@@ -1191,21 +1201,10 @@ TEST(ExperienceMap, AHeadingBetweenTheGatesIsTakenBackWhenTheWallsAfterItAgree) 
 }
 
 TEST(ExperienceMap, OneWallOffTheAxesSeenOverAWideTurnIsNotTakenForDrift) {
-  // The demo's gates and recapture. The heading is right; the robot turns on the spot, 0.15 rad a
-  // frame, and sees walls in the map's directions `seen(frame)` (0 and pi/2: the two axes).
-  ExperienceMapConfig config = HeldToWalls();
-  config.exp_manhattan_min_offset_rad = 0.1;
-  config.exp_manhattan_offset_per_rad_turned = 0.1;
-  config.exp_manhattan_max_offset_rad = 0.25;
-  config.exp_manhattan_taper = true;
-  config.exp_manhattan_recapture_frames = 20;
-  config.exp_manhattan_recapture_turn_rad = 0.5;
-  config.exp_manhattan_recapture_inside_widest = true;
+  // The demo's heading hold. The heading is right; the robot turns on the spot, `turn_per_frame`,
+  // and sees walls in the map's directions `seen(frame)` (0 and pi/2: the two axes).
+  const ExperienceMapConfig config = DemoHeadingHold();
   const double noise[] = {0.01, -0.005, 0.0, 0.008, -0.01};
-  struct Result {
-    double error_rad;
-    uint64_t recaptures;
-  };
   const auto spin = [&](double one_axis_turn_rad, double turn_per_frame, auto seen, double drift_rad) {
     ExperienceMapConfig c = config;
     c.exp_manhattan_recapture_one_axis_turn_rad = one_axis_turn_rad;
@@ -1218,25 +1217,25 @@ TEST(ExperienceMap, OneWallOffTheAxesSeenOverAWideTurnIsNotTakenForDrift) {
       truly += turn_per_frame;
       map.HoldHeading(seen(frame) + noise[frame % 5] - truly);  // in the robot's frame
     }
-    return Result{WrapAngle(map.RobotPose().theta - truly), map.heading_recaptures()};
+    return HeadingResult{WrapAngle(map.RobotPose().theta - truly), map.heading_recaptures()};
   };
   // One wall 0.3 rad off the axes, seen again and again over 4.5 rad of turning (AG3, session 73:
   // 0.26 rad taken out of a right heading over 6.4 rad). Without the key it is taken for drift;
   // with the demo's (the camera's field of view, 60 degrees) it is not.
   const auto one_wall = [](int) { return 0.3; };
-  const Result taken = spin(0.0, 0.15, one_wall, 0.0);
+  const HeadingResult taken = spin(0.0, 0.15, one_wall, 0.0);
   EXPECT_EQ(taken.recaptures, 1u);
   EXPECT_NEAR(taken.error_rad, -0.3, 0.02);
-  const Result kept = spin(kPi / 3, 0.15, one_wall, 0.0);
+  const HeadingResult kept = spin(kPi / 3, 0.15, one_wall, 0.0);
   EXPECT_EQ(kept.recaptures, 0u);
   EXPECT_NEAR(kept.error_rad, 0.0, 1e-9);
   // A heading 0.3 rad off: over the same turn walls of both axes come 0.3 off. Taken back.
   const auto both_axes = [](int frame) { return frame % 3 ? 0.0 : kPi / 2; };
-  const Result both = spin(kPi / 3, 0.15, both_axes, 0.3);
+  const HeadingResult both = spin(kPi / 3, 0.15, both_axes, 0.3);
   EXPECT_EQ(both.recaptures, 1u);
   EXPECT_LT(std::abs(both.error_rad), 0.02);
   // ... and over a narrower turn (0.8 rad over the twenty) one axis's walls are enough, as before.
-  const Result narrow = spin(kPi / 3, 0.04, [](int) { return 0.0; }, 0.3);
+  const HeadingResult narrow = spin(kPi / 3, 0.04, [](int) { return 0.0; }, 0.3);
   EXPECT_EQ(narrow.recaptures, 1u);
   EXPECT_LT(std::abs(narrow.error_rad), 0.02);
 
