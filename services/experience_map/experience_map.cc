@@ -123,11 +123,12 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     if (std::abs(mean) > config_.exp_manhattan_recapture_max_rad) return;
     for (const OutsideGate& o : offsets_outside_gate_)
       if (std::abs(std::remainder(o.offset_rad - mean, kPi / 2.0)) > config_.exp_manhattan_recapture_spread_rad) return;
-    // A drift puts every wall the same offset off its axis. Over a wide turn the camera faces walls
-    // of both axes, so offsets of one axis alone are more likely one wall off the axes seen again
-    // and again: of the 8 recaptures in 54 live runs (session 73), the 4 wrong ones came over
-    // 2.1-6.4 rad of turning from walls of one axis; the right ones over 0.5-0.7 rad, or 2.0 rad
-    // from both axes (6 and 14 offsets).
+    // A drift puts every wall the same offset off its axis; one wall off the axes, seen again and
+    // again as the robot circles before it, gives offsets of one axis alone. So over more turning
+    // than exp_manhattan_recapture_one_axis_turn_rad (the camera's field of view in the demo) walls
+    // of both axes must agree: of 18 recaptures judged in session 74's replays the 8 wrong ones
+    // came from one axis over 0.90-6.4 rad of turning, the right ones from one axis over 0.54-0.93
+    // rad (one over 1.35 rad undid a wrong one) or from both (deploy/config/demo.yaml has figures).
     if (config_.exp_manhattan_recapture_one_axis_turn_rad > 0 &&
         turned > config_.exp_manhattan_recapture_one_axis_turn_rad) {
       const auto axis1 = std::count_if(offsets_outside_gate_.begin(), offsets_outside_gate_.end(),
