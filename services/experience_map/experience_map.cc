@@ -126,9 +126,7 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     // A drift puts every wall the same offset off its axis; one wall off the axes, seen again and
     // again as the robot circles before it, gives offsets of one axis alone. So over more turning
     // than exp_manhattan_recapture_one_axis_turn_rad (the camera's field of view in the demo) walls
-    // of both axes must agree: of 18 recaptures judged in session 74's replays the 8 wrong ones
-    // came from one axis over 0.90-6.4 rad of turning, the right ones from one axis over 0.54-0.93
-    // rad (one over 1.35 rad undid a wrong one) or from both (deploy/config/demo.yaml has figures).
+    // of both axes must agree (the recaptures judged: deploy/config/demo.yaml).
     if (config_.exp_manhattan_recapture_one_axis_turn_rad > 0 &&
         turned > config_.exp_manhattan_recapture_one_axis_turn_rad) {
       const auto axis1 = std::count_if(offsets_outside_gate_.begin(), offsets_outside_gate_.end(),
