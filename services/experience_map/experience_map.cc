@@ -528,6 +528,16 @@ void ExperienceMap::RegisterStretch(uint32_t a, uint32_t older, const std::vecto
   }
   scan_links_.push_back(scan);
   graph_pending_ = true;
+  if (config_.exp_recognition_jump_scan_restarts)
+    driven_since_recognition_m_ = std::min(driven_since_recognition_m_, DrivenSince(a));
+}
+
+double ExperienceMap::DrivenSince(uint32_t since) const {
+  // Experiences are made one after another along the path.
+  double d = std::hypot(accum_x_, accum_y_);
+  for (uint32_t i = since; i + 1 < experiences_.size(); ++i)
+    d += std::hypot(experiences_[i + 1].x_m - experiences_[i].x_m, experiences_[i + 1].y_m - experiences_[i].y_m);
+  return d;
 }
 
 bool ExperienceMap::ScanLinksAgree(const ScanLink& a, const ScanLink& b) const {

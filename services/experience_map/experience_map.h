@@ -236,6 +236,8 @@ class ExperienceMap {
   // ... one of those registrations: the stretch around `a` (its points `source`) with the one
   // around `older`.
   void RegisterStretch(uint32_t a, uint32_t older, const std::vector<Eigen::Vector2f>& source);
+  // The distance the map has the robot driven since it made experience `since`.
+  double DrivenSince(uint32_t since) const;
   // exp_scan_confirm_ids: the loop scan links a and b close with the map's placement of their ends
   // is within exp_scan_confirm_m / _rad.
   bool ScanLinksAgree(const ScanLink& a, const ScanLink& b) const;

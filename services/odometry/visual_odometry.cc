@@ -32,14 +32,18 @@ double SharedShift(double left, double right) {
 // The turn the halves give: the shift they share, except in a steady turn on the spot (the last
 // two frames turns on the spot, `previous` and `before` within `tolerance` px of each other), where
 // halves more than `tolerance` apart give the one within `tolerance` of `previous`
-// (turn_continuity_px; 0 = always the shared shift). Halves sharing no shift right after a turn
-// on the spot give the one within `follow` px of `previous` (turn_follow_px; 0 = off) if it moves
-// as no forward drive moves it.
+// (turn_continuity_px; 0 = always the shared shift), unless both move as a forward drive moves
+// them by fewer than `forward_px` px (turn_continuity_forward_px). Halves sharing no shift right
+// after a turn on the spot give the one within `follow` px of `previous` (turn_follow_px; 0 = off)
+// if it moves as no forward drive moves it.
 double HalvesShift(double left, double right, std::optional<double> previous, std::optional<double> before,
-                   double tolerance, double follow) {
+                   double tolerance, double follow, double forward_px) {
   const double l = previous ? std::abs(left - *previous) : 0.0, r = previous ? std::abs(right - *previous) : 0.0;
   const bool steady_turn = tolerance > 0 && previous && before && std::abs(*previous - *before) <= tolerance;
-  if (steady_turn && std::abs(left - right) > tolerance && std::min(l, r) <= tolerance) return l <= r ? left : right;
+  if (steady_turn && std::abs(left - right) > tolerance && std::min(l, r) <= tolerance) {
+    const bool drive = left < 0 && right > 0 && std::max(-left, right) < forward_px;
+    if (!drive) return l <= r ? left : right;
+  }
   const double shared = SharedShift(left, right);
   // The turn followed must not itself have jumped from the frame before (a turn's end misread).
   const bool followable = previous && (!before || std::abs(*previous - *before) <= follow);
@@ -369,7 +373,8 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
     const size_t half = rotation_width / 2;
     const auto left = rotation_shift(0, half), right = rotation_shift(rotation_width - half, half);
     double shared = HalvesShift(left.second, right.second, turning_shift_px_, turning_shift_before_px_,
-                                config_.turn_continuity_px, config_.turn_follow_px);
+                                config_.turn_continuity_px, config_.turn_follow_px,
+                                config_.turn_continuity_forward_px);
     halves_agree = std::abs(left.second - right.second) <= config_.turn_continuity_px;
     if (config_.turn_continuity_agreed_rate && !halves_agree && agreed_turn_shift_px_) {
       const double whole = rotation_shift(0, rotation_width).second;

@@ -70,6 +70,13 @@ struct VisualOdometryConfig {
   // erratic for its first frames, too soon for the steady turn above (it needs two turning frames
   // within turn_continuity_px), and each frame read as no turn lost a whole frame's turn. 0 = off.
   double turn_follow_px = 0.0;
+  // With turn_continuity_px, halves moving as a forward drive moves them (the left half left, the
+  // right half right), both by fewer pixels than this, are not followed as the steady turn going
+  // on: driving obliquely at a wall, the near half streams outwards a few pixels a frame, and once
+  // a mismatched other half had read two frames as a slow turn, the steady turn followed it (AL37,
+  // session 75: 15 frames of driving read as a turn on the spot). A true turn moves the half it
+  // follows by its whole rate (the demo's robot: 24 px a frame). 0 = off.
+  double turn_continuity_forward_px = 0.0;
   // The rotation profile is smoothed by a moving mean over this many columns each side before it
   // is matched: a wall close by at a slant shows stripes a pixel or two wide (the texture seen
   // edge-on), which a turn of a fraction of a pixel more or less changes column by column.
@@ -115,6 +122,8 @@ struct VisualOdometryConfig {
       "a turn on the spot goes on at the rate its halves last agreed on: halves apart take the half or whole crop nearest it");
     v("turn_follow_px", turn_follow_px,
       "after a turn on the spot, halves sharing no shift: the one this near that frame's shift is the turn (0 = off)");
+    v("turn_continuity_forward_px", turn_continuity_forward_px,
+      "steady turn: halves moving as a forward drive moves them, both by fewer px than this, are no turn (0 = off)");
     v("edge_shift_reads_no_turn", edge_shift_reads_no_turn,
       "a rotation match at the search's edge (max_shift_px) reads no turn: the least difference lies beyond it");
     v("rotation_profile_smoothing_px", rotation_profile_smoothing_px,
@@ -142,6 +151,7 @@ struct VisualOdometryConfig {
     Require(!turn_continuity_agreed_rate || (rotation_from_halves && turn_continuity_px > 0),
             "turn_continuity_agreed_rate", "needs rotation_from_halves and turn_continuity_px > 0");
     Require(turn_follow_px >= 0, "turn_follow_px", "must be >= 0");
+    Require(turn_continuity_forward_px >= 0, "turn_continuity_forward_px", "must be >= 0");
     Require(turn_follow_px == 0 || rotation_from_halves, "turn_follow_px", "needs rotation_from_halves");
     Require(rotation_profile_smoothing_px >= 0 && rotation_profile_smoothing_px <= 64, "rotation_profile_smoothing_px",
             "must be 0..64");

@@ -376,6 +376,45 @@ TEST(ScanLinks, AnExperienceKeepsOnlyTheWallsOfTheVisitThatMadeIt) {
   EXPECT_EQ(map.experiences()[0].scan.size(), 3u);
 }
 
+// A kept scan link ties the map to an earlier visit as a recognition does, so with
+// exp_recognition_jump_scan_restarts the jump gate's distance restarts at its newer end. After two
+// laps (14 m driven, no recognition) a place 3 m from where the map has the robot is taken without
+// it (7.5 m allowed) and refused with it (the last scan link a few experiences back).
+TEST(ScanLinks, AKeptScanLinkRestartsTheJumpGatesDistance) {
+  for (const bool restarts : {false, true}) {
+    const Laps run = DriveLaps(true, [restarts](ExperienceMapConfig& c) {
+      c.exp_recognition_max_jump_m = 0.5;
+      c.exp_recognition_jump_per_m = 0.5;
+      c.exp_recognition_jump_scan_restarts = restarts;
+    });
+    ASSERT_GT(run.map->scan_links().size(), 10u);
+    const uint32_t last = static_cast<uint32_t>(run.map->experiences().size() - 1);
+    const Pose2D robot = run.map->RobotPose();
+    uint32_t far = 0;  // the experience of the second lap farthest from the robot: its far end
+    for (uint32_t id = last / 2; id <= last; ++id) {
+      const Experience& e = run.map->experiences()[id];
+      const Experience& f = run.map->experiences()[far];
+      if (std::hypot(e.x_m - robot.x, e.y_m - robot.y) > std::hypot(f.x_m - robot.x, f.y_m - robot.y)) far = id;
+    }
+    ExperienceAction set;
+    set.kind = ExperienceAction::Kind::kSet;
+    set.experience_id = far;
+    set.from_experience_id = last;
+    set.sequence = last + 1;
+    run.map->Apply(set);
+    if (!restarts) {
+      EXPECT_FALSE(run.map->last_refusal().has_value());
+      EXPECT_EQ(run.map->current_id(), far);
+      continue;
+    }
+    ASSERT_TRUE(run.map->last_refusal().has_value());
+    EXPECT_EQ(run.map->last_refusal()->gate, RecognitionRefusal::Gate::kJump);
+    EXPECT_GT(run.map->last_refusal()->value, 2.5);
+    EXPECT_LT(run.map->last_refusal()->limit, 1.5);
+    EXPECT_EQ(run.map->current_id(), last);
+  }
+}
+
 TEST(ScanLinks, SaveLoadKeepsTheWallsAndTheLinksAndRefusesBrokenOnes) {
   const Laps run = DriveLaps(true);
   const proto::ExperienceMap saved = run.map->Save();

@@ -175,6 +175,41 @@ TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
   EXPECT_THROW(negative.Validate(), ConfigError);
 }
 
+// Driving at a wall obliquely, the near half's view streams outwards a few pixels a frame while
+// the other half's mismatches: read as a slow turn twice, the steady turn above then followed that
+// half as the turn going on. With turn_continuity_forward_px, halves both moving as a forward
+// drive moves them (the left half left, the right half right), both slower than it, are no turn.
+TEST(VisualOdometryTest, ASteadyTurnIsNotFollowedThroughHalvesMovingAsAForwardDriveMovesThem) {
+  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
+  const TwoHalves frame;
+  // Two frames turning clockwise `turn` px each, then the left half moves on at the turn's rate and
+  // the right half `right` px.
+  const auto after_turn = [&](double forward_px, int turn, int right) {
+    VisualOdometryConfig config;
+    config.rotation_from_halves = true;
+    config.subpixel_rotation = true;
+    config.turn_in_place_vrot_radps = 0.12;
+    config.turn_continuity_px = 3;
+    config.turn_continuity_forward_px = forward_px;
+    VisualOdometry vo(config);
+    int offset = 400;
+    vo.Update(frame(offset, offset), kDt);
+    for (int i = 0; i < 2; ++i) {
+      offset -= turn;
+      EXPECT_NEAR(vo.Update(frame(offset, offset), kDt).vrot * kDt / rad_per_px, turn, 0.5);
+    }
+    return vo.Update(frame(offset - turn, offset - right), kDt).vrot * kDt / rad_per_px;
+  };
+  EXPECT_NEAR(after_turn(0, -10, 4), -10.0, 1.0);  // off: the left half goes on as the turn
+  EXPECT_NEAR(after_turn(16, -10, 4), 0.0, 1e-9);  // both halves as a drive moves them
+  EXPECT_NEAR(after_turn(16, -20, 4), -20.0, 1.0);  // faster than a drive moves a half: the turn
+  EXPECT_NEAR(after_turn(16, -10, 20), -10.0, 1.0);  // the right half mismatched past it
+  EXPECT_NEAR(after_turn(16, -10, -4), -10.0, 1.0);  // not the pattern of a drive
+  VisualOdometryConfig negative;
+  negative.turn_continuity_forward_px = -1;
+  EXPECT_THROW(negative.Validate(), ConfigError);
+}
+
 TEST(VisualOdometryTest, TurnFollowKeepsATurnsSecondFrameWhereOneHalfMismatches) {
   const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const TwoHalves frame;
