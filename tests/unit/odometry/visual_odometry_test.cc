@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <numbers>
 #include <vector>
@@ -58,6 +59,29 @@ class TwoHalves {
  private:
   const cv::Mat left_, right_;
 };
+
+// The turn (px) read from a frame whose halves move `left` and `right` px, after frames turning on
+// the spot `turns` px each with both halves alike; `configure` sets the rules under test on top of
+// the steady turn (turn_continuity_px 3).
+double ShiftAfterTurn(const std::function<void(VisualOdometryConfig&)>& configure, const std::vector<int>& turns,
+                      int left, int right) {
+  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
+  const TwoHalves frame;
+  VisualOdometryConfig config;
+  config.rotation_from_halves = true;
+  config.subpixel_rotation = true;
+  config.turn_in_place_vrot_radps = 0.12;
+  config.turn_continuity_px = 3;
+  configure(config);
+  VisualOdometry vo(config);
+  int offset = 400;
+  vo.Update(frame(offset, offset), kDt);
+  for (const int turn : turns) {
+    offset -= turn;
+    EXPECT_NEAR(vo.Update(frame(offset, offset), kDt).vrot * kDt / rad_per_px, turn, 1.0);
+  }
+  return vo.Update(frame(offset - left, offset - right), kDt).vrot * kDt / rad_per_px;
+}
 
 TEST(VisualOdometryTest, ShiftedProfileDifferenceIsEq4OnHandComputedArrays) {
   const std::vector<float> previous = {0, 1, 2, 3};
@@ -180,25 +204,11 @@ TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
 // half as the turn going on. With turn_continuity_forward_px, halves both moving as a forward
 // drive moves them (the left half left, the right half right), both slower than it, are no turn.
 TEST(VisualOdometryTest, ASteadyTurnIsNotFollowedThroughHalvesMovingAsAForwardDriveMovesThem) {
-  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
-  const TwoHalves frame;
   // Two frames turning clockwise `turn` px each, then the left half moves on at the turn's rate and
   // the right half `right` px.
-  const auto after_turn = [&](double forward_px, int turn, int right) {
-    VisualOdometryConfig config;
-    config.rotation_from_halves = true;
-    config.subpixel_rotation = true;
-    config.turn_in_place_vrot_radps = 0.12;
-    config.turn_continuity_px = 3;
-    config.turn_continuity_forward_px = forward_px;
-    VisualOdometry vo(config);
-    int offset = 400;
-    vo.Update(frame(offset, offset), kDt);
-    for (int i = 0; i < 2; ++i) {
-      offset -= turn;
-      EXPECT_NEAR(vo.Update(frame(offset, offset), kDt).vrot * kDt / rad_per_px, turn, 0.5);
-    }
-    return vo.Update(frame(offset - turn, offset - right), kDt).vrot * kDt / rad_per_px;
+  const auto after_turn = [](double forward_px, int turn, int right) {
+    return ShiftAfterTurn([&](VisualOdometryConfig& c) { c.turn_continuity_forward_px = forward_px; }, {turn, turn},
+                          turn, right);
   };
   EXPECT_NEAR(after_turn(0, -10, 4), -10.0, 1.0);  // off: the left half goes on as the turn
   EXPECT_NEAR(after_turn(16, -10, 4), 0.0, 1e-9);  // both halves as a drive moves them
@@ -211,25 +221,10 @@ TEST(VisualOdometryTest, ASteadyTurnIsNotFollowedThroughHalvesMovingAsAForwardDr
 }
 
 TEST(VisualOdometryTest, TurnFollowKeepsATurnsSecondFrameWhereOneHalfMismatches) {
-  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
-  const TwoHalves frame;
   // Frames of a turn on the spot, both halves `turns` px each; then the halves move by `left` and
   // `right` px and share no shift (in front of a plain wall, where a turn starts).
-  const auto after_turn = [&](double follow_px, std::vector<int> turns, int left, int right) {
-    VisualOdometryConfig config;
-    config.rotation_from_halves = true;
-    config.subpixel_rotation = true;
-    config.turn_in_place_vrot_radps = 0.12;
-    config.turn_continuity_px = 3;
-    config.turn_follow_px = follow_px;
-    VisualOdometry vo(config);
-    int offset = 400;
-    vo.Update(frame(offset, offset), kDt);
-    for (const int turn : turns) {
-      offset -= turn;
-      EXPECT_NEAR(vo.Update(frame(offset, offset), kDt).vrot * kDt / rad_per_px, turn, 1.0);
-    }
-    return vo.Update(frame(offset - left, offset - right), kDt).vrot * kDt / rad_per_px;
+  const auto after_turn = [](double follow_px, std::vector<int> turns, int left, int right) {
+    return ShiftAfterTurn([&](VisualOdometryConfig& c) { c.turn_follow_px = follow_px; }, turns, left, right);
   };
   // Turning left: the left half goes on (2 px faster), the right half mismatches 10 px the other way.
   EXPECT_NEAR(after_turn(0, {20}, 22, -10), 0.0, 1e-9);  // off: the shared shift, none
