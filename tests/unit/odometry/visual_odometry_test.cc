@@ -60,6 +60,16 @@ class TwoHalves {
   const cv::Mat left_, right_;
 };
 
+// Turns on the spot read from the two halves, a steady turn followed through one half (turn_continuity_px).
+VisualOdometryConfig SteadyTurnConfig(double continuity_px = 3) {
+  VisualOdometryConfig config;
+  config.rotation_from_halves = true;
+  config.subpixel_rotation = true;
+  config.turn_in_place_vrot_radps = 0.12;
+  config.turn_continuity_px = continuity_px;
+  return config;
+}
+
 // The turn (px) read from a frame whose halves move `left` and `right` px, after frames turning on
 // the spot `turns` px each with both halves alike; `configure` sets the rules under test on top of
 // the steady turn (turn_continuity_px 3).
@@ -67,11 +77,7 @@ double ShiftAfterTurn(const std::function<void(VisualOdometryConfig&)>& configur
                       int left, int right) {
   const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const TwoHalves frame;
-  VisualOdometryConfig config;
-  config.rotation_from_halves = true;
-  config.subpixel_rotation = true;
-  config.turn_in_place_vrot_radps = 0.12;
-  config.turn_continuity_px = 3;
+  VisualOdometryConfig config = SteadyTurnConfig();
   configure(config);
   VisualOdometry vo(config);
   int offset = 400;
@@ -176,11 +182,7 @@ TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
   // Turning on the spot 20 px a frame (0.29 rad/s); in the last frame the right half matches
   // 10 px the other way (a stretch of wall that repeats), and the halves share no shift.
   const auto last_turn = [&](double continuity_px, int turning_frames) {
-    VisualOdometryConfig config;
-    config.rotation_from_halves = true;
-    config.subpixel_rotation = true;
-    config.turn_in_place_vrot_radps = 0.12;
-    config.turn_continuity_px = continuity_px;
+    VisualOdometryConfig config = SteadyTurnConfig(continuity_px);
     VisualOdometry vo(config);
     int offset = 400;
     vo.Update(frame(offset, offset), kDt);
@@ -280,11 +282,7 @@ TEST(VisualOdometryTest, AMatchAtTheSearchsEdgeReadsNoTurnWhenConfigured) {
 TEST(VisualOdometryTest, AgreedRateKeepsATurnWhoseHalvesAgreedUntilOneMismatches) {
   const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const TwoHalves frame;
-  VisualOdometryConfig config;
-  config.rotation_from_halves = true;
-  config.subpixel_rotation = true;
-  config.turn_in_place_vrot_radps = 0.12;
-  config.turn_continuity_px = 3;
+  VisualOdometryConfig config = SteadyTurnConfig();
   // One frame of a turn, 20 px, both halves agreeing; then the right half matches 10 px the other
   // way. One turning frame is no steady turn yet (turn_continuity_px alone reads no turn), but
   // its halves agreed on the rate, and the left half goes on at it.
