@@ -44,6 +44,8 @@ cv::Mat AddNoise(const cv::Mat& grey, double sigma, uint64_t seed) {
 }
 
 constexpr double kDt = 0.1;
+// The default camera_fov_deg (53) over the 640-px test frames: the turn one pixel of shift reads.
+constexpr double kRadPerPx = 53.0 * std::numbers::pi / 180.0 / 640.0;
 
 // A 640-px frame whose left and right halves are two textures, each seen from its own offset (a
 // smaller one moves it right), so the two halves can shift by different amounts.
@@ -75,7 +77,6 @@ VisualOdometryConfig SteadyTurnConfig(double continuity_px = 3) {
 // the steady turn (turn_continuity_px 3).
 double ShiftAfterTurn(const std::function<void(VisualOdometryConfig&)>& configure, const std::vector<int>& turns,
                       int left, int right) {
-  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const TwoHalves frame;
   VisualOdometryConfig config = SteadyTurnConfig();
   configure(config);
@@ -84,9 +85,9 @@ double ShiftAfterTurn(const std::function<void(VisualOdometryConfig&)>& configur
   vo.Update(frame(offset, offset), kDt);
   for (const int turn : turns) {
     offset -= turn;
-    EXPECT_NEAR(vo.Update(frame(offset, offset), kDt).vrot * kDt / rad_per_px, turn, 1.0);
+    EXPECT_NEAR(vo.Update(frame(offset, offset), kDt).vrot * kDt / kRadPerPx, turn, 1.0);
   }
-  return vo.Update(frame(offset - left, offset - right), kDt).vrot * kDt / rad_per_px;
+  return vo.Update(frame(offset - left, offset - right), kDt).vrot * kDt / kRadPerPx;
 }
 
 TEST(VisualOdometryTest, ShiftedProfileDifferenceIsEq4OnHandComputedArrays) {
@@ -177,7 +178,6 @@ TEST(VisualOdometryTest, SceneMovingRightIsCounterClockwiseRotationOfExpectedMag
 }
 
 TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
-  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const TwoHalves frame;
   // Turning on the spot 20 px a frame (0.29 rad/s); in the last frame the right half matches
   // 10 px the other way (a stretch of wall that repeats), and the halves share no shift.
@@ -189,9 +189,9 @@ TEST(VisualOdometryTest, TurnContinuityKeepsASteadyTurnWhereOneHalfMismatches) {
     for (int i = 0; i < turning_frames; ++i) {
       offset -= 20;
       const Velocity turning = vo.Update(frame(offset, offset), kDt);
-      EXPECT_NEAR(turning.vrot * kDt / rad_per_px, 20.0, 0.2);
+      EXPECT_NEAR(turning.vrot * kDt / kRadPerPx, 20.0, 0.2);
     }
-    return vo.Update(frame(offset - 20, offset + 10), kDt).vrot * kDt / rad_per_px;
+    return vo.Update(frame(offset - 20, offset + 10), kDt).vrot * kDt / kRadPerPx;
   };
   EXPECT_NEAR(last_turn(0.0, 2), 0.0, 1e-9);   // off: the shared shift, none
   EXPECT_NEAR(last_turn(3.0, 2), 20.0, 0.5);   // the half that goes on turning as before
@@ -259,7 +259,6 @@ TEST(VisualOdometryTest, TurnFollowKeepsATurnsSecondFrameWhereOneHalfMismatches)
 }
 
 TEST(VisualOdometryTest, AMatchAtTheSearchsEdgeReadsNoTurnWhenConfigured) {
-  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const TwoHalves frame;
   // Both halves' views move by `shift` px; 40 px is the edge of the search (max_shift_px 40).
   const auto read = [&](bool halves, bool edge_reads_no_turn, int shift) {
@@ -268,7 +267,7 @@ TEST(VisualOdometryTest, AMatchAtTheSearchsEdgeReadsNoTurnWhenConfigured) {
     config.edge_shift_reads_no_turn = edge_reads_no_turn;
     VisualOdometry vo(config);
     vo.Update(frame(400, 400), kDt);
-    return vo.Update(frame(400 - shift, 400 - shift), kDt).vrot * kDt / rad_per_px;
+    return vo.Update(frame(400 - shift, 400 - shift), kDt).vrot * kDt / kRadPerPx;
   };
   for (const bool halves : {false, true}) {
     EXPECT_NEAR(read(halves, false, 39), 39.0, 1e-9) << "halves " << halves;
@@ -280,7 +279,6 @@ TEST(VisualOdometryTest, AMatchAtTheSearchsEdgeReadsNoTurnWhenConfigured) {
 }
 
 TEST(VisualOdometryTest, AgreedRateKeepsATurnWhoseHalvesAgreedUntilOneMismatches) {
-  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const TwoHalves frame;
   VisualOdometryConfig config = SteadyTurnConfig();
   // One frame of a turn, 20 px, both halves agreeing; then the right half matches 10 px the other
@@ -290,11 +288,11 @@ TEST(VisualOdometryTest, AgreedRateKeepsATurnWhoseHalvesAgreedUntilOneMismatches
     config.turn_continuity_agreed_rate = agreed_rate;
     VisualOdometry vo(config);
     vo.Update(frame(400, 400), kDt);
-    EXPECT_NEAR(vo.Update(frame(380, 380), kDt).vrot * kDt / rad_per_px, 20.0, 0.2);
+    EXPECT_NEAR(vo.Update(frame(380, 380), kDt).vrot * kDt / kRadPerPx, 20.0, 0.2);
     if (stop_between) {
-      EXPECT_NEAR(vo.Update(frame(380, 380), kDt).vrot * kDt / rad_per_px, 0.0, 0.1);
+      EXPECT_NEAR(vo.Update(frame(380, 380), kDt).vrot * kDt / kRadPerPx, 0.0, 0.1);
     }
-    return vo.Update(frame(360, 390), kDt).vrot * kDt / rad_per_px;
+    return vo.Update(frame(360, 390), kDt).vrot * kDt / kRadPerPx;
   };
   EXPECT_NEAR(after_mismatch(false, false), 0.0, 1e-9);
   EXPECT_NEAR(after_mismatch(true, false), 20.0, 1.0);
@@ -306,12 +304,11 @@ TEST(VisualOdometryTest, AgreedRateKeepsATurnWhoseHalvesAgreedUntilOneMismatches
   VisualOdometry vo(config);
   vo.Update(frame(400, 400), kDt);
   vo.Update(frame(380, 380), kDt);
-  EXPECT_NEAR(vo.Update(frame(370, 370), kDt).vrot * kDt / rad_per_px, 10.0, 0.2);
+  EXPECT_NEAR(vo.Update(frame(370, 370), kDt).vrot * kDt / kRadPerPx, 10.0, 0.2);
   EXPECT_NEAR(vo.Update(frame(374, 361), kDt).vrot, 0.0, 1e-9);
 }
 
 TEST(VisualOdometryTest, SmoothedRotationProfileKeepsTheTurn) {
-  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   const cv::Mat wide = Texture(760, 480, 2);
   for (const int smoothing : {0, 2, 8}) {
     VisualOdometryConfig config;
@@ -321,7 +318,7 @@ TEST(VisualOdometryTest, SmoothedRotationProfileKeepsTheTurn) {
     vo.Update(View(wide, 60, 640), kDt);
     for (int shift : {12, -25}) {
       const Velocity v = vo.Update(View(wide, 60 - shift, 640), kDt);
-      EXPECT_NEAR(v.vrot * kDt / rad_per_px, shift, 0.2) << "smoothing " << smoothing;
+      EXPECT_NEAR(v.vrot * kDt / kRadPerPx, shift, 0.2) << "smoothing " << smoothing;
       vo.Update(View(wide, 60, 640), kDt);  // back
     }
   }
@@ -335,7 +332,6 @@ TEST(VisualOdometryTest, SubpixelRotationRecoversAFractionalShift) {
     cv::resize(wide(cv::Rect(offset_fifths, 0, 5 * 640, 480)), small, cv::Size(640, 480), 0, 0, cv::INTER_AREA);
     return small;
   };
-  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   for (const bool subpixel : {false, true}) {
     VisualOdometryConfig config;
     config.subpixel_rotation = subpixel;
@@ -343,12 +339,11 @@ TEST(VisualOdometryTest, SubpixelRotationRecoversAFractionalShift) {
     vo.Update(view(300), kDt);
     const Velocity v = vo.Update(view(300 - 62), kDt);
     EXPECT_EQ(v.rotation_shift_px, 12);
-    EXPECT_NEAR(v.vrot * kDt / rad_per_px, subpixel ? 12.4 : 12.0, subpixel ? 0.1 : 1e-9);
+    EXPECT_NEAR(v.vrot * kDt / kRadPerPx, subpixel ? 12.4 : 12.0, subpixel ? 0.1 : 1e-9);
   }
 }
 
 TEST(VisualOdometryTest, RotationFromHalvesKeepsATurnAndIgnoresFlowOnlyOneHalfShows) {
-  const double rad_per_px = 53.0 * std::numbers::pi / 180.0 / 640.0;
   VisualOdometryConfig halves;
   halves.rotation_from_halves = true;
   halves.subpixel_rotation = true;
@@ -361,7 +356,7 @@ TEST(VisualOdometryTest, RotationFromHalvesKeepsATurnAndIgnoresFlowOnlyOneHalfSh
     vo.Update(View(wide, 60, 640), kDt);
     const Velocity v = vo.Update(View(wide, 60 - shift, 640), kDt);
     EXPECT_EQ(v.rotation_shift_px, shift);
-    EXPECT_NEAR(v.vrot * kDt / rad_per_px, shift, 0.2);
+    EXPECT_NEAR(v.vrot * kDt / kRadPerPx, shift, 0.2);
   }
   // Driving straight at a wall whose left half has the stronger texture: the view grows 10%
   // about the centre, the left half moving left and the right half right. One match follows the
@@ -376,8 +371,8 @@ TEST(VisualOdometryTest, RotationFromHalvesKeepsATurnAndIgnoresFlowOnlyOneHalfSh
   VisualOdometry one(whole), two(halves);
   one.Update(scene, kDt);
   two.Update(scene, kDt);
-  EXPECT_LT(one.Update(nearer, kDt).vrot * kDt / rad_per_px, -4.0);
-  EXPECT_NEAR(two.Update(nearer, kDt).vrot * kDt / rad_per_px, 0.0, 0.05);
+  EXPECT_LT(one.Update(nearer, kDt).vrot * kDt / kRadPerPx, -4.0);
+  EXPECT_NEAR(two.Update(nearer, kDt).vrot * kDt / kRadPerPx, 0.0, 0.05);
   // A frame of two 320-px views side by side.
   const auto side_by_side = [](const cv::Mat& left, const cv::Mat& right) {
     cv::Mat frame;
@@ -391,13 +386,13 @@ TEST(VisualOdometryTest, RotationFromHalvesKeepsATurnAndIgnoresFlowOnlyOneHalfSh
   VisualOdometry driving(halves);
   driving.Update(side_by_side(View(near_wall, 20, 320), View(far_wall, 20, 320)), kDt);
   EXPECT_NEAR(driving.Update(side_by_side(View(near_wall, 34, 320), View(far_wall, 20, 320)), kDt).vrot * kDt /
-                  rad_per_px,
+                  kRadPerPx,
               0.0, 0.05);
   // Turning while the near wall streams faster: both halves move the same way (12 and 5 px), the
   // turn is the smaller shift.
   VisualOdometry arc(halves);
   arc.Update(side_by_side(View(near_wall, 20, 320), View(far_wall, 25, 320)), kDt);
-  EXPECT_NEAR(arc.Update(side_by_side(View(near_wall, 8, 320), View(far_wall, 20, 320)), kDt).vrot * kDt / rad_per_px,
+  EXPECT_NEAR(arc.Update(side_by_side(View(near_wall, 8, 320), View(far_wall, 20, 320)), kDt).vrot * kDt / kRadPerPx,
               5.0, 0.2);
   // Each half must be wider than min_overlap_px.
   halves.vrot_image_x_min = 300;
