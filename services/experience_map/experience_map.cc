@@ -136,6 +136,7 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
     }
     accum_facing_ = WrapAngle(accum_facing_ - mean);
     ++heading_recaptures_;
+    recaptured_since_recognition_ = true;
   } else {
     // Tapered or not, a wall inside the gate counts as held: the gate narrows again below.
     const double taper = config_.exp_manhattan_taper ? Taper(offset, config_.exp_manhattan_max_offset_rad) : 1.0;
@@ -377,7 +378,10 @@ void ExperienceMap::Apply(const ExperienceAction& a) {
       }
       pose_cells_current_.reset();
       const uint32_t local_ids = static_cast<uint32_t>(config_.exp_recognition_jump_local_ids);
-      if ((to > current_ ? to - current_ : current_ - to) > local_ids) driven_since_recognition_m_ = 0.0;
+      if ((to > current_ ? to - current_ : current_ - to) > local_ids) {
+        driven_since_recognition_m_ = 0.0;
+        recaptured_since_recognition_ = false;
+      }
       bool changed = false;
       if (link_kind || config_.exp_average_repeated_links) {
         if (const int fwd = FindLink(current_, to); fwd >= 0) {
@@ -528,7 +532,12 @@ void ExperienceMap::RegisterStretch(uint32_t a, uint32_t older, const std::vecto
   }
   scan_links_.push_back(scan);
   graph_pending_ = true;
-  if (config_.exp_recognition_jump_scan_restarts)
+  // Not between a heading recapture and the next recognition: a recapture turns the map at the
+  // robot, and whether it was right shows only in how older places line up after it. Scan links
+  // turn the map by at most exp_scan_max_correction_rad, so those kept then tie the map to the
+  // stretch drawn since, not to the older places; restarting the distance on them refused the
+  // recognitions that would have undone a wrong recapture (AM70, session 77).
+  if (config_.exp_recognition_jump_scan_restarts && !recaptured_since_recognition_)
     driven_since_recognition_m_ = std::min(driven_since_recognition_m_, DrivenSince(a));
 }
 
@@ -851,6 +860,7 @@ proto::ExperienceMap ExperienceMap::Save() const {
   m.set_has_pose_cells_current(pose_cells_current_.has_value());
   m.set_pose_cells_current_id(pose_cells_current_.value_or(0));
   m.set_driven_since_recognition_m(driven_since_recognition_m_);
+  m.set_recaptured_since_recognition(recaptured_since_recognition_);
   m.set_turned_since_hold_rad(turned_since_hold_rad_);
   for (const OutsideGate& o : offsets_outside_gate_) {
     m.add_outside_gate_offset_rad(o.offset_rad);
@@ -1007,6 +1017,7 @@ void ExperienceMap::Load(const proto::ExperienceMap& m) {
                                      m.outside_gate_axis_size() ? static_cast<int>(m.outside_gate_axis(i)) : 0});
   pose_cells_current_ = m.has_pose_cells_current() ? std::optional(m.pose_cells_current_id()) : std::nullopt;
   driven_since_recognition_m_ = m.driven_since_recognition_m();
+  recaptured_since_recognition_ = m.recaptured_since_recognition();
   if (m.has_bridge()) {
     const proto::Bridge& b = m.bridge();
     bridge_from_ = b.from_id();

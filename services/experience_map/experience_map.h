@@ -292,6 +292,9 @@ class ExperienceMap {
   std::deque<OutsideGate> offsets_outside_gate_;
   // exp_recognition_max_jump_m: metres driven since the last recognition taken (or the start).
   double driven_since_recognition_m_ = 0.0;
+  // A heading recapture came since the last recognition of an older place: scan links do not
+  // restart the distance above (exp_recognition_jump_scan_restarts).
+  bool recaptured_since_recognition_ = false;
   std::optional<uint32_t> pose_cells_current_;
   uint64_t refused_recognitions_ = 0;
   std::optional<RecognitionRefusal> last_refusal_;

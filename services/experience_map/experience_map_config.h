@@ -88,7 +88,8 @@ struct ExperienceMapConfig {
   int exp_recognition_jump_local_ids = 0;
   // A scan link kept (below) ties the map at its newer end to a visit made long before, as a
   // recognition does: with this on, the distance the jump gate grows with restarts there too (at
-  // the distance driven since that end).
+  // the distance driven since that end), except between a heading recapture and the next
+  // recognition of an older place.
   bool exp_recognition_jump_scan_restarts = false;
   double exp_recognition_max_turn_rad = 0.0;
   double exp_recognition_max_link_m = 0.0;
@@ -214,7 +215,8 @@ struct ExperienceMapConfig {
     v("exp_recognition_jump_local_ids", exp_recognition_jump_local_ids,
       "> 0: a recognition within this many ids of the current experience does not restart that distance");
     v("exp_recognition_jump_scan_restarts", exp_recognition_jump_scan_restarts,
-      "a scan link kept restarts that distance too (at the distance driven since its newer end)");
+      "a scan link kept restarts that distance too (at the distance driven since its newer end), "
+      "except between a heading recapture and the next recognition");
     v("exp_recognition_max_turn_rad", exp_recognition_max_turn_rad,
       "> 0: a recognition that would turn the robot's facing by more than this is refused (rad)");
     v("exp_recognition_max_link_m", exp_recognition_max_link_m,

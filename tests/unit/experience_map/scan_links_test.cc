@@ -184,7 +184,8 @@ struct Lookalike {
 // blind_lap: no floor boundary is seen on that lap (counted from 0), so its stretches have no walls.
 Laps DriveLaps(bool scan_links, const std::function<void(ExperienceMapConfig&)>& configure = {},
                std::optional<Lookalike> lookalike = std::nullopt, double misread_m = 0.0, int laps = 2,
-               std::optional<int> blind_lap = std::nullopt) {
+               std::optional<int> blind_lap = std::nullopt,
+               const std::function<void(ExperienceMap&)>& before = {}) {
   ExperienceMapConfig config;
   config.exp_initial_em_deg = 0;
   config.exp_graph_optimisation = true;
@@ -195,6 +196,7 @@ Laps DriveLaps(bool scan_links, const std::function<void(ExperienceMapConfig&)>&
   config.exp_scan_min_age = 40;
   if (configure) configure(config);
   Laps run{std::make_unique<ExperienceMap>(config), {}, laps};
+  if (before) before(*run.map);
   const std::vector<Segment> room = Room();
   struct Leg {
     int frames;
@@ -379,15 +381,37 @@ TEST(ScanLinks, AnExperienceKeepsOnlyTheWallsOfTheVisitThatMadeIt) {
 // A kept scan link ties the map to an earlier visit as a recognition does, so with
 // exp_recognition_jump_scan_restarts the jump gate's distance restarts at its newer end. After two
 // laps (14 m driven, no recognition) a place 3 m from where the map has the robot is taken without
-// it (7.5 m allowed) and refused with it (the last scan link a few experiences back).
-TEST(ScanLinks, AKeptScanLinkRestartsTheJumpGatesDistance) {
-  for (const bool restarts : {false, true}) {
-    const Laps run = DriveLaps(true, [restarts](ExperienceMapConfig& c) {
+// it (7.5 m allowed) and refused with it (the last scan link a few experiences back). But not
+// after a heading recapture, until a recognition: the links kept then may tie the map only to what
+// it drew since (AM70, session 77).
+TEST(ScanLinks, AKeptScanLinkRestartsTheJumpGatesDistanceUnlessTheHeadingWasRecaptured) {
+  // Before the laps: the walls' axes fixed at 0, a turn the robot did not make (0.4 rad), and ten
+  // walls on the axes seen 0.4 rad off over 1.2 rad of turning, which take it out.
+  const auto recapture = [](ExperienceMap& map) {
+    for (int i = 0; i < 5; ++i) map.HoldHeading(0.0);
+    map.Integrate(0.0, 0.4, 1.0);
+    for (int i = 0; i < 10; ++i) {
+      map.Integrate(0.0, 0.12, 1.0);
+      map.HoldHeading(0.4 - map.RobotPose().theta);
+    }
+    ASSERT_EQ(map.heading_recaptures(), 1u);
+  };
+  struct Case {
+    bool restarts, recaptured;
+  };
+  for (const auto [restarts, recaptured] : {Case{false, false}, Case{true, false}, Case{true, true}}) {
+    const auto configure = [restarts](ExperienceMapConfig& c) {
       c.exp_recognition_max_jump_m = 0.5;
       c.exp_recognition_jump_per_m = 0.5;
       c.exp_recognition_jump_scan_restarts = restarts;
-    });
+      c.exp_manhattan = true;
+      c.exp_manhattan_reference_frames = 5;
+      c.exp_manhattan_recapture_frames = 10;
+    };
+    const Laps run = DriveLaps(true, configure, std::nullopt, 0.0, 2, std::nullopt,
+                               recaptured ? recapture : std::function<void(ExperienceMap&)>{});
     ASSERT_GT(run.map->scan_links().size(), 10u);
+    EXPECT_EQ(run.map->Save().recaptured_since_recognition(), recaptured);
     const uint32_t last = static_cast<uint32_t>(run.map->experiences().size() - 1);
     const Pose2D robot = run.map->RobotPose();
     uint32_t far = 0;  // the experience of the second lap farthest from the robot: its far end
@@ -402,9 +426,10 @@ TEST(ScanLinks, AKeptScanLinkRestartsTheJumpGatesDistance) {
     set.from_experience_id = last;
     set.sequence = last + 1;
     run.map->Apply(set);
-    if (!restarts) {
+    if (!restarts || recaptured) {
       EXPECT_FALSE(run.map->last_refusal().has_value());
       EXPECT_EQ(run.map->current_id(), far);
+      EXPECT_FALSE(run.map->Save().recaptured_since_recognition()) << "a recognition settles it";
       continue;
     }
     ASSERT_TRUE(run.map->last_refusal().has_value());
