@@ -412,6 +412,9 @@ TEST(ScanLinks, AKeptScanLinkRestartsTheJumpGatesDistanceUnlessTheHeadingWasReca
                                recaptured ? recapture : std::function<void(ExperienceMap&)>{});
     ASSERT_GT(run.map->scan_links().size(), 10u);
     EXPECT_EQ(run.map->Save().recaptured_since_recognition(), recaptured);
+    ExperienceMap reloaded(run.map->config());
+    reloaded.Load(run.map->Save());
+    EXPECT_EQ(reloaded.Save().recaptured_since_recognition(), recaptured) << "kept by a restart";
     const uint32_t last = static_cast<uint32_t>(run.map->experiences().size() - 1);
     const Pose2D robot = run.map->RobotPose();
     uint32_t far = 0;  // the experience of the second lap farthest from the robot: its far end
