@@ -97,19 +97,31 @@ BoundaryMatch RegisterBoundaries(std::span<const Eigen::Vector2f> stored, std::s
   BoundaryMatch best;
   best.median_residual_m = std::numeric_limits<double>::max();
   Pairing pairing;
-  for (const double seed : kForwardSeedsM) {
-    Eigen::Vector3d pose(seed, 0.0, 0.0);
+  static_assert(kForwardSeedsM.size() == std::tuple_size_v<decltype(best.ends)>);
+  for (size_t k = 0; k < kForwardSeedsM.size(); ++k) {
+    Eigen::Vector3d pose(kForwardSeedsM[k], 0.0, 0.0);
     for (int i = 0; i < kIterations; ++i) {
       Pair(a, b, pose, pairing);
       if (!Update(pairing, pose)) break;
     }
     Pair(a, b, pose, pairing);
+    best.ends[k] = {pose, pairing.median};
     if (pairing.median < best.median_residual_m) {
       best.median_residual_m = pairing.median;
       best.pose = pose;
     }
   }
   return best;
+}
+
+Eigen::Vector2d BoundaryMatch::NearestAlike(const Eigen::Vector2d& guess, double alike) const {
+  Eigen::Vector2d nearest = pose.head<2>();
+  for (const End& end : ends) {
+    if (end.median_residual_m <= alike * median_residual_m &&
+        (end.pose.head<2>() - guess).norm() < (nearest - guess).norm())
+      nearest = end.pose.head<2>();
+  }
+  return nearest;
 }
 
 }  // namespace rslam::pose_cells

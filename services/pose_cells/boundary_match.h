@@ -8,7 +8,7 @@
 // with the nearest stored point; pairs within max(2.5 x the median pair distance, 5 cm) give the
 // closed-form rigid update. It starts from five offsets along the robot's forward axis (-0.8 to
 // 0.8 m: two views of one place are mostly taken driving the same corridor, at different points
-// of it) and keeps the one that ends with the smallest median pair distance.
+// of it) and keeps the one that ends with the smallest median pair distance; all five ends are kept.
 //
 // Why this and not the views alone: sixteen recorded demo runs' views and odometry replayed
 // through the pose cells (session 14): the wrong links look like right ones to the views and the
@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <span>
 
 namespace rslam::pose_cells {
@@ -27,7 +28,18 @@ namespace rslam::pose_cells {
 struct BoundaryMatch {
   double median_residual_m = 0.0;  // median distance of the current points to their nearest stored one
   Eigen::Vector3d pose = Eigen::Vector3d::Zero();  // the current scan's frame in the stored one's (x, y, theta)
+  // Where each start ended, with its median residual. Walls along the robot's way (a corridor)
+  // do not fix the place along them: each start then ends about where it began, at residuals
+  // alike, and the best of them is the one whose few openings happen to fit.
+  struct End {
+    Eigen::Vector3d pose = Eigen::Vector3d::Zero();
+    double median_residual_m = 0.0;
+  };
+  std::array<End, 5> ends{};
   double offset_m() const { return pose.head<2>().norm(); }
+  // Of the ends whose median residual is at most `alike` times the best's, the position nearest
+  // `guess` (the best's when `alike` is below 1).
+  Eigen::Vector2d NearestAlike(const Eigen::Vector2d& guess, double alike) const;
 };
 
 // Requires both scans non-empty (std::invalid_argument otherwise).

@@ -2,6 +2,7 @@
 // Configuration of the pose-cell network. Keys and defaults are OpenRatSLAM's (ratslam.ini
 // names), so an OpenRatSLAM config section translates one to one.
 
+#include <cmath>
 #include <cstdint>
 
 #include "common/config/config_error.h"
@@ -70,6 +71,13 @@ struct PoseCellConfig {
   // frame's few metres of wall can agree on a place that thirty frames of wall show is another.
   // Needs exp_submap_offset; a visit with too few boundary points is not checked.
   bool exp_submap_check = false;
+  // Not OpenRatSLAM's: walls along the robot's way (a corridor) do not fix where along them the
+  // robot stands, and the two visits' registration (boundary_match.h) then ends about where each
+  // of its starts began, at residuals alike. With this at 1 or more, of the ends whose median
+  // residual is at most this many times the best's, exp_submap_offset takes the one nearest to
+  // the views' offset (exp_view_offset), else to the one frame's registered offset; 0 takes the
+  // best. Needs exp_submap_offset.
+  double exp_submap_alike_residual = 0.0;
 
   template <class V>
   void VisitFields(V& v) {
@@ -115,6 +123,8 @@ struct PoseCellConfig {
       "exp_submap_offset registers the boundaries of this many frames around each visit");
     v("exp_submap_check", exp_submap_check,
       "refuse a new link to an old experience when both visits' floor boundaries register but do not align");
+    v("exp_submap_alike_residual", exp_submap_alike_residual,
+      "exp_submap_offset takes, of the registration's ends within this factor of the best residual, the one nearest the views' offset (0: the best)");
   }
 
   void Validate() const {
@@ -145,6 +155,10 @@ struct PoseCellConfig {
     Require(exp_submap_min_age_frames >= 0, "exp_submap_min_age_frames", "must be non-negative");
     Require(exp_submap_frames >= 0, "exp_submap_frames", "must be non-negative");
     Require(!exp_submap_check || exp_submap_offset, "exp_submap_check", "needs exp_submap_offset (the visits' walls)");
+    Require(exp_submap_alike_residual == 0 || (exp_submap_alike_residual >= 1 && std::isfinite(exp_submap_alike_residual)),
+            "exp_submap_alike_residual", "must be 0 or at least 1");
+    Require(exp_submap_alike_residual == 0 || exp_submap_offset, "exp_submap_alike_residual",
+            "needs exp_submap_offset (the visits' walls)");
   }
 };
 

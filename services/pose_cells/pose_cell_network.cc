@@ -942,7 +942,13 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
         action.refused_link_to = matched;
       } else {
         std::optional<Eigen::Vector2d> measured = config_.exp_view_offset ? ViewOffset(matched) : std::nullopt;
-        if (walls_align) measured = walls->pose.head<2>();
+        if (walls_align) {
+          std::optional<Eigen::Vector2d> guess = measured;
+          if (!guess && aligns) guess = match->pose.head<2>();
+          measured = guess && config_.exp_submap_alike_residual >= 1.0
+                         ? walls->NearestAlike(*guess, config_.exp_submap_alike_residual)
+                         : walls->pose.head<2>();
+        }
         if (measured) {
           action.offset_x_m = measured->x();
           action.offset_y_m = measured->y();

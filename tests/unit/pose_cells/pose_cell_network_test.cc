@@ -472,18 +472,22 @@ bool Recognises(const Action& a) { return a.kind == Action::Kind::kLink || a.kin
 // exp_submap_offset: each place of the pillar loop is recognised from the frame that sees its view
 // best. The view's offset puts the robot on the place; the walls of both passes (30 frames around
 // each) say it stands 0.3 m to its left. Places younger than exp_submap_min_age_frames, or the key
-// off, keep the view's offset.
+// off, keep the view's offset. The pillar fixes the place along the wall, so the registration's
+// other ends fit worse and exp_submap_alike_residual keeps the walls' offset too.
 TEST(PoseCellNetwork, SubmapOffsetTakesTheWallsOfBothVisitsOverTheView) {
   struct Case {
     bool on;
     int min_age;
     bool beside;  // the offsets expected: 0.3 m beside the place, else the view's (on it)
+    double alike = 0.0;
   };
-  for (const Case& c : {Case{true, 10, true}, Case{true, 1000, false}, Case{false, 10, false}}) {
+  for (const Case& c : {Case{true, 10, true}, Case{true, 10, true, 1.35}, Case{true, 1000, false},
+                        Case{false, 10, false}}) {
     PoseCellConfig cfg = SmallConfig();
     cfg.exp_view_offset = true;
     cfg.exp_submap_offset = c.on;
     cfg.exp_submap_min_age_frames = c.min_age;
+    cfg.exp_submap_alike_residual = c.on ? c.alike : 0.0;
     PoseCellNetwork net(cfg);
     int recognised = 0;
     const std::vector<Action> back = DrivePillarLoop(net, kPillarRoom, kPillarRoom);
@@ -700,8 +704,15 @@ TEST(PoseCellNetwork, ConfigValidationNamesTheKey) {
   even_kernel.pc_w_e_dim = 6;
   PoseCellConfig check_without_walls;
   check_without_walls.exp_submap_check = true;  // exp_submap_offset off
+  PoseCellConfig alike_without_walls;
+  alike_without_walls.exp_submap_alike_residual = 1.35;
+  PoseCellConfig alike_below_one;
+  alike_below_one.exp_submap_offset = true;
+  alike_below_one.exp_submap_alike_residual = 0.5;
   for (const auto& [c, key] :
-       {std::pair{even_kernel, "pc_w_e_dim"}, std::pair{check_without_walls, "exp_submap_check"}}) {
+       {std::pair{even_kernel, "pc_w_e_dim"}, std::pair{check_without_walls, "exp_submap_check"},
+        std::pair{alike_without_walls, "exp_submap_alike_residual"},
+        std::pair{alike_below_one, "exp_submap_alike_residual"}}) {
     try {
       c.Validate();
       ADD_FAILURE() << key;
