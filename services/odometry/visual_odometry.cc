@@ -304,6 +304,62 @@ double SubpixelOffset(std::span<const float> current, std::span<const float> pre
   return std::clamp((left - right) / (2.0 * slope), -0.5, 0.5);
 }
 
+}  // namespace
+
+EqualAngleColumns MakeEqualAngleColumns(cv::Size image, double fov_rad, double tilt_rad, const cv::Rect& crop) {
+  if (crop.width < 2 || crop.height < 1 || crop.x < 0 || crop.y < 0 || crop.x + crop.width > image.width ||
+      crop.y + crop.height > image.height || !(fov_rad > 0 && fov_rad < std::numbers::pi) ||
+      !(std::abs(tilt_rad) < std::numbers::pi / 2)) {
+    throw std::invalid_argument("MakeEqualAngleColumns: needs a crop of 2 or more columns inside the image, a field of "
+                                "view in (0, pi) and a tilt under pi/2");
+  }
+  const double focal = 0.5 * image.width / std::tan(0.5 * fov_rad);
+  const auto x_of = [&](double u) { return (u + 0.5 - 0.5 * image.width) / focal; };
+  std::vector<double> forward(static_cast<size_t>(crop.height));
+  double low = -std::numbers::pi, high = std::numbers::pi;
+  for (int r = 0; r < crop.height; ++r) {
+    const double y = (crop.y + r + 0.5 - 0.5 * image.height) / focal;
+    forward[static_cast<size_t>(r)] = std::cos(tilt_rad) - y * std::sin(tilt_rad);
+    low = std::max(low, std::atan(x_of(crop.x) / forward[static_cast<size_t>(r)]));
+    high = std::min(high, std::atan(x_of(crop.x + crop.width - 1) / forward[static_cast<size_t>(r)]));
+  }
+  EqualAngleColumns columns;
+  columns.count = crop.width;
+  columns.rad_per_column = (high - low) / (crop.width - 1);
+  columns.at_px.resize(static_cast<size_t>(crop.height) * crop.width);
+  for (int r = 0; r < crop.height; ++r) {
+    for (int j = 0; j < crop.width; ++j) {
+      const double x = forward[static_cast<size_t>(r)] * std::tan(low + j * columns.rad_per_column);
+      const double u = x * focal + 0.5 * image.width - 0.5 - crop.x;
+      columns.at_px[static_cast<size_t>(r) * crop.width + j] = std::clamp(u, 0.0, crop.width - 1.0);
+    }
+  }
+  return columns;
+}
+
+void EqualAngleProfile(const cv::Mat& grey_crop, const EqualAngleColumns& columns, std::vector<float>& profile) {
+  if (grey_crop.type() != CV_8UC1 || grey_crop.cols != columns.count ||
+      columns.at_px.size() != static_cast<size_t>(grey_crop.rows) * columns.count) {
+    throw std::invalid_argument("EqualAngleProfile: the crop does not match its columns");
+  }
+  std::vector<double> sums(static_cast<size_t>(columns.count), 0.0);
+  const int last = columns.count - 1;
+  for (int r = 0; r < grey_crop.rows; ++r) {
+    const uint8_t* row = grey_crop.ptr<uint8_t>(r);
+    const double* at = columns.at_px.data() + static_cast<size_t>(r) * columns.count;
+    for (int j = 0; j < columns.count; ++j) {
+      const int i = std::min(static_cast<int>(at[j]), last - 1);
+      const double t = at[j] - i;
+      sums[static_cast<size_t>(j)] += (1.0 - t) * row[i] + t * row[i + 1];
+    }
+  }
+  profile.resize(sums.size());
+  const double scale = 1.0 / (255.0 * grey_crop.rows);
+  for (size_t j = 0; j < sums.size(); ++j) profile[j] = static_cast<float>(sums[j] * scale);
+}
+
+namespace {
+
 // Each entry replaced by the mean of the entries within `radius` of it (fewer at the ends): a box
 // filter, which moves with the profile, so a turn's shift is kept.
 void SmoothProfile(std::vector<float>& profile, int radius) {
@@ -318,6 +374,18 @@ void SmoothProfile(std::vector<float>& profile, int radius) {
 }
 
 }  // namespace
+
+void VisualOdometry::RotationProfile(const cv::Mat& image, std::vector<float>& profile) {
+  if (equal_angle_.count == 0) {
+    CropProfile(image, vrot_crop_, profile);
+  } else if (image.channels() == 1) {
+    EqualAngleProfile(image(vrot_crop_), equal_angle_, profile);
+  } else {
+    cv::cvtColor(image(vrot_crop_), crop_grey_, image.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
+    EqualAngleProfile(crop_grey_, equal_angle_, profile);
+  }
+  SmoothProfile(profile, config_.rotation_profile_smoothing_px);
+}
 
 Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   CheckImage(image);
@@ -342,16 +410,21 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
     image_size_ = size;
     vtrans_crop_ = vtrans_crop;
     vrot_crop_ = vrot_crop;
+    const double fov_rad = config_.camera_fov_deg * std::numbers::pi / 180.0;
+    equal_angle_ = {};
+    rad_per_column_ = fov_rad / size.width;
+    if (config_.equal_angle_columns) {
+      equal_angle_ = MakeEqualAngleColumns(size, fov_rad, config_.camera_tilt_rad, vrot_crop);
+      rad_per_column_ = equal_angle_.rad_per_column;
+    }
     CropProfile(image, vtrans_crop_, vtrans_previous_);
-    CropProfile(image, vrot_crop_, vrot_previous_);
-    SmoothProfile(vrot_previous_, config_.rotation_profile_smoothing_px);
+    RotationProfile(image, vrot_previous_);
     has_previous_ = true;
     return Velocity{};
   }
 
   CropProfile(image, vtrans_crop_, vtrans_profile_);
-  CropProfile(image, vrot_crop_, vrot_profile_);
-  SmoothProfile(vrot_profile_, config_.rotation_profile_smoothing_px);
+  RotationProfile(image, vrot_profile_);
   // The rotation profile's shift (refined below a pixel with subpixel_rotation) over [first, first + width).
   const auto rotation_shift = [&](size_t first, size_t width) {
     const std::span<const float> current(vrot_profile_.data() + first, width);
@@ -392,10 +465,9 @@ Velocity VisualOdometry::Update(const cv::Mat& image, double dt_s) {
   std::swap(vtrans_profile_, vtrans_previous_);
   std::swap(vrot_profile_, vrot_previous_);
 
-  const double rad_per_px = config_.camera_fov_deg * std::numbers::pi / 180.0 / image_size_.width;
   Velocity velocity;
   velocity.rotation_shift_px = rotation.first;
-  velocity.vrot = rotation.second * rad_per_px / dt_s;
+  velocity.vrot = rotation.second * rad_per_column_ / dt_s;
   velocity.speed_difference = speed.difference;
   const double moving_difference = std::max(speed.difference - config_.vtrans_noise_floor, 0.0);
   velocity.vtrans =

@@ -78,6 +78,25 @@ ProfileMatch BestProfileShift(std::span<const float> current, std::span<const fl
 // Column means of grey(crop) divided by 255, written to profile (resized to the crop width).
 void ColumnIntensityProfile(const cv::Mat& grey, const cv::Rect& crop, std::vector<float>& profile);
 
+// Columns of equal azimuth over a crop of a pinhole image (equal_angle_columns): the camera's
+// model is the simulator's and the floor odometry's, pixel (u, v) looking along x = (u + 0.5 -
+// width / 2) / f right and y = (v + 0.5 - height / 2) / f down of the axis, f = width / 2 /
+// tan(fov / 2), the axis tilted down by tilt_rad, so its azimuth is atan(x / (cos t - y sin t)):
+// a row above the image's centre spans a little less azimuth than the centre row. As many columns
+// as the crop's pixel columns, spanning the azimuths every row of the crop sees.
+struct EqualAngleColumns {
+  int count = 0;                // columns
+  double rad_per_column = 0.0;  // the azimuth between neighbours
+  std::vector<double> at_px;    // row by row (the crop's rows), where each column lies in the crop's pixel columns
+};
+// Throws std::invalid_argument unless the crop (2 or more columns) lies inside the image, fov_rad
+// is in (0, pi) and |tilt_rad| < pi / 2.
+EqualAngleColumns MakeEqualAngleColumns(cv::Size image, double fov_rad, double tilt_rad, const cv::Rect& crop);
+
+// The profile over those columns of grey_crop (CV_8UC1, the crop's size): each row read at its
+// columns by linear interpolation, the rows' mean divided by 255.
+void EqualAngleProfile(const cv::Mat& grey_crop, const EqualAngleColumns& columns, std::vector<float>& profile);
+
 class VisualOdometry {
  public:
   explicit VisualOdometry(VisualOdometryConfig config);  // throws ConfigError on a bad config
@@ -101,6 +120,9 @@ class VisualOdometry {
   void CheckImage(const cv::Mat& image) const;
   // The crop's column-intensity profile, converting only the crop of a colour image.
   void CropProfile(const cv::Mat& image, const cv::Rect& crop, std::vector<float>& profile);
+  // The rotation crop's profile: over columns of equal azimuth (equal_angle_columns), then
+  // smoothed (rotation_profile_smoothing_px).
+  void RotationProfile(const cv::Mat& image, std::vector<float>& profile);
 
   const VisualOdometryConfig config_;
   cv::Size image_size_{0, 0};  // fixed by the first frame
@@ -113,6 +135,10 @@ class VisualOdometry {
   std::optional<double> agreed_turn_shift_px_;
   std::vector<float> vtrans_profile_, vtrans_previous_;
   std::vector<float> vrot_profile_, vrot_previous_;
+  // The turn each column of the rotation profile stands for (rad), and with equal_angle_columns
+  // the rotation crop's columns of equal azimuth (fixed by the first frame).
+  double rad_per_column_ = 0.0;
+  EqualAngleColumns equal_angle_;
   cv::Mat crop_grey_;  // a colour frame's crop converted to grey (reused from frame to frame)
 };
 

@@ -417,6 +417,107 @@ TEST(VisualOdometryTest, RotationRateScalesWithDt) {
   EXPECT_NEAR(slow, fast / 2.0, 1e-12);
 }
 
+// The azimuth pixel (u, v) of a 320 x 240 pinhole image over 60 degrees looks along, tilted down
+// by tilt (right of the axis positive), as MakeEqualAngleColumns models it.
+double PixelAzimuth(double u, int v, double tilt) {
+  const double focal = 160.0 / std::tan(std::numbers::pi / 6.0);
+  const double x = (u + 0.5 - 160.0) / focal, y = (v + 0.5 - 120.0) / focal;
+  return std::atan(x / (std::cos(tilt) - y * std::sin(tilt)));
+}
+
+TEST(VisualOdometryTest, EqualAngleColumnsLieAtEqualAzimuthsInEveryRowOfTheCrop) {
+  const double fov = std::numbers::pi / 3.0;
+  for (const double tilt : {0.0, 0.3}) {
+    for (const cv::Rect& crop : {cv::Rect(0, 0, 320, 90), cv::Rect(100, 30, 120, 40), cv::Rect(0, 200, 160, 40)}) {
+      const EqualAngleColumns columns = MakeEqualAngleColumns({320, 240}, fov, tilt, crop);
+      ASSERT_EQ(columns.count, crop.width);
+      ASSERT_EQ(columns.at_px.size(), static_cast<size_t>(crop.width * crop.height));
+      const double first = PixelAzimuth(crop.x + columns.at_px[0], crop.y, tilt);
+      for (int r = 0; r < crop.height; r += 7) {
+        for (int j = 0; j < crop.width; j += 13) {
+          const double at = columns.at_px[static_cast<size_t>(r * crop.width + j)];
+          EXPECT_GE(at, 0.0);
+          EXPECT_LE(at, crop.width - 1.0);
+          EXPECT_NEAR(PixelAzimuth(crop.x + at, crop.y + r, tilt), first + j * columns.rad_per_column, 1e-9)
+              << tilt << " " << r << " " << j;
+        }
+      }
+    }
+  }
+  const EqualAngleColumns level = MakeEqualAngleColumns({320, 240}, fov, 0.0, {0, 0, 320, 240});
+  EXPECT_LT(level.at_px[161] - level.at_px[160], 0.95);  // a centre column spans more than a pixel's
+  EXPECT_GT(level.at_px[1] - level.at_px[0], 1.15);      // ... average angle, an edge column less
+  EXPECT_THROW(MakeEqualAngleColumns({320, 240}, std::numbers::pi, 0.0, {0, 0, 320, 90}), std::invalid_argument);
+  EXPECT_THROW(MakeEqualAngleColumns({320, 240}, fov, 0.0, {300, 0, 40, 90}), std::invalid_argument);
+}
+
+TEST(VisualOdometryTest, EqualAngleProfileInterpolatesEachRowAndAveragesThem) {
+  cv::Mat crop(2, 3, CV_8UC1);
+  crop.at<uint8_t>(0, 0) = 0, crop.at<uint8_t>(0, 1) = 51, crop.at<uint8_t>(0, 2) = 153;
+  crop.at<uint8_t>(1, 0) = 255, crop.at<uint8_t>(1, 1) = 255, crop.at<uint8_t>(1, 2) = 255;
+  EqualAngleColumns columns;
+  columns.count = 3;
+  columns.at_px = {0.0, 0.5, 2.0, 0.0, 1.25, 2.0};
+  std::vector<float> profile;
+  EqualAngleProfile(crop, columns, profile);
+  ASSERT_EQ(profile.size(), 3u);
+  EXPECT_NEAR(profile[0], 0.5, 1e-6);                  // (0 + 255) / 2 / 255
+  EXPECT_NEAR(profile[1], (25.5 + 255.0) / 510.0, 1e-6);
+  EXPECT_NEAR(profile[2], (153.0 + 255.0) / 510.0, 1e-6);
+  EXPECT_THROW(EqualAngleProfile(crop(cv::Rect(0, 0, 2, 2)), columns, profile), std::invalid_argument);
+}
+
+// A 320 x 240 pinhole camera over 60 degrees, tilted down by `tilt`, turning left on the spot
+// before scenery textured by bearing only within `band` (bearings in the first frame, rad, left
+// of the robot positive) and plain grey elsewhere; the rotation crop is the top 90 rows, as in the
+// demo. Returns the turn read, rad.
+double PinholeTurnRead(bool equal_angle, double tilt, std::pair<double, double> band, double turn) {
+  const cv::Mat texture = Texture(2400, 8, 21, 12);  // bearings -1.2..1.2 rad, 1 mrad a column
+  auto frame = [&](double heading) {
+    cv::Mat image(240, 320, CV_8UC1);
+    for (int v = 0; v < 240; ++v) {
+      for (int u = 0; u < 320; ++u) {
+        const double bearing = heading - PixelAzimuth(u, v, tilt);
+        const double x = (bearing + 1.2) * 1000.0;
+        const int i = std::clamp(static_cast<int>(x), 0, 2398);
+        const double t = std::clamp(x - i, 0.0, 1.0);
+        const double textured = (1 - t) * texture.at<uint8_t>(4, i) + t * texture.at<uint8_t>(4, i + 1);
+        image.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(bearing >= band.first && bearing <= band.second ? textured : 128.0);
+      }
+    }
+    return image;
+  };
+  VisualOdometryConfig cfg;
+  cfg.camera_fov_deg = 60.0;
+  cfg.camera_tilt_rad = tilt;
+  cfg.vrot_image_x_min = 0;
+  cfg.vrot_image_x_max = -1;
+  cfg.vrot_image_y_min = 0;
+  cfg.vrot_image_y_max = 90;
+  cfg.vtrans_image_x_min = 110;
+  cfg.vtrans_image_x_max = 210;
+  cfg.vtrans_image_y_min = 20;
+  cfg.vtrans_image_y_max = 110;
+  cfg.subpixel_rotation = true;
+  cfg.equal_angle_columns = equal_angle;
+  VisualOdometry vo(cfg);
+  vo.Update(frame(0.0), kDt);
+  return vo.Update(frame(turn), kDt).vrot * kDt;
+}
+
+TEST(VisualOdometryTest, EqualAngleColumnsReadATurnAlikeWhereverTheTextureLies) {
+  // The same turn (0.06 rad, about 17 px at the centre, 22 px at the edges) before texture near the
+  // image's centre and near its left edge, the camera level and tilted as the demo's.
+  const double turn = 0.06;
+  const std::pair<double, double> centre{-0.25, 0.25}, edge{0.28, 0.6};
+  for (const double tilt : {0.0, 0.3}) {
+    EXPECT_LT(PinholeTurnRead(false, tilt, centre, turn), 0.96 * turn) << tilt;  // pixel columns: short at the centre
+    EXPECT_GT(PinholeTurnRead(false, tilt, edge, turn), 1.03 * turn) << tilt;    // ... long toward the edge
+    EXPECT_NEAR(PinholeTurnRead(true, tilt, centre, turn), turn, 0.01 * turn) << tilt;
+    EXPECT_NEAR(PinholeTurnRead(true, tilt, edge, turn), turn, 0.01 * turn) << tilt;
+  }
+}
+
 TEST(VisualOdometryTest, StandstillGivesZeroSpeedWithIdenticalAndNoisyFrames) {
   const cv::Mat scene = Texture(640, 480, 4);
   VisualOdometry vo(VisualOdometryConfig{});
