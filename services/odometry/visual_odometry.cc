@@ -274,15 +274,16 @@ void VisualOdometry::CheckImage(const cv::Mat& image) const {
   }
 }
 
-void VisualOdometry::CropProfile(const cv::Mat& image, const cv::Rect& crop, std::vector<float>& profile) {
-  if (image.channels() == 1) {
-    ColumnIntensityProfile(image, crop, profile);
-    return;
-  }
+cv::Mat VisualOdometry::GreyCrop(const cv::Mat& image, const cv::Rect& crop) {
+  if (image.channels() == 1) return image(crop);  // a view, no copy
   // Grey conversion is per pixel, so converting only the crop gives the crop of the converted
   // frame, bit for bit, at a fraction of the cost.
   cv::cvtColor(image(crop), crop_grey_, image.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
-  ColumnIntensityProfile(crop_grey_, cv::Rect(0, 0, crop.width, crop.height), profile);
+  return crop_grey_;
+}
+
+void VisualOdometry::CropProfile(const cv::Mat& image, const cv::Rect& crop, std::vector<float>& profile) {
+  ColumnIntensityProfile(GreyCrop(image, crop), cv::Rect(0, 0, crop.width, crop.height), profile);
 }
 
 namespace {
@@ -376,14 +377,8 @@ void SmoothProfile(std::vector<float>& profile, int radius) {
 }  // namespace
 
 void VisualOdometry::RotationProfile(const cv::Mat& image, std::vector<float>& profile) {
-  if (equal_angle_.count == 0) {
-    CropProfile(image, vrot_crop_, profile);
-  } else if (image.channels() == 1) {
-    EqualAngleProfile(image(vrot_crop_), equal_angle_, profile);
-  } else {
-    cv::cvtColor(image(vrot_crop_), crop_grey_, image.channels() == 3 ? cv::COLOR_BGR2GRAY : cv::COLOR_BGRA2GRAY);
-    EqualAngleProfile(crop_grey_, equal_angle_, profile);
-  }
+  if (equal_angle_.count == 0) CropProfile(image, vrot_crop_, profile);
+  else EqualAngleProfile(GreyCrop(image, vrot_crop_), equal_angle_, profile);
   SmoothProfile(profile, config_.rotation_profile_smoothing_px);
 }
 

@@ -118,7 +118,9 @@ class VisualOdometry {
 
  private:
   void CheckImage(const cv::Mat& image) const;
-  // The crop's column-intensity profile, converting only the crop of a colour image.
+  // The crop in grey: a view of a grey image, else only the crop converted (into crop_grey_).
+  cv::Mat GreyCrop(const cv::Mat& image, const cv::Rect& crop);
+  // The crop's column-intensity profile.
   void CropProfile(const cv::Mat& image, const cv::Rect& crop, std::vector<float>& profile);
   // The rotation crop's profile: over columns of equal azimuth (equal_angle_columns), then
   // smoothed (rotation_profile_smoothing_px).
