@@ -92,13 +92,14 @@ struct VisualOdometryConfig {
   bool edge_shift_reads_no_turn = false;
   // The rotation profile taken over columns of equal azimuth, for a pinhole camera of
   // camera_fov_deg across the whole image, centred on it and tilted down by camera_tilt_rad
-  // (visual_odometry.h, MakeEqualAngleColumns): its pixel columns near the edges subtend less
+  // (visual_odometry.h, MakeEqualAngleColumns; the odometry service takes the tilt from
+  // floor_odometry.camera.tilt_rad, the one place its config gives the camera's pose): its pixel columns near the edges subtend less
   // than those at the centre (at 60 degrees, 0.75 times), so a turn moves texture at the edge
   // 1.33 times as many pixels as texture at the centre, and the shift a match finds reads the turn
   // short or long as the texture lies. Over columns of equal azimuth a turn moves every column
   // alike. Off: pixel columns, each camera_fov_deg / width (a panoramic camera's).
   bool equal_angle_columns = false;
-  double camera_tilt_rad = 0.0;  // the camera's axis below the horizontal (equal_angle_columns)
+  double camera_tilt_rad = 0.0;  // the camera's axis below the horizontal; not a key (above)
 
   template <class V>
   void VisitFields(V& v) {
@@ -139,8 +140,8 @@ struct VisualOdometryConfig {
     v("rotation_profile_smoothing_px", rotation_profile_smoothing_px,
       "the rotation profile is smoothed by a moving mean over this many columns each side before matching (0 = off)");
     v("equal_angle_columns", equal_angle_columns,
-      "the rotation profile is taken over columns of equal azimuth (a pinhole camera of camera_fov_deg, camera_tilt_rad)");
-    v("camera_tilt_rad", camera_tilt_rad, "the camera's axis below the horizontal, rad (for equal_angle_columns)");
+      "the rotation profile is taken over columns of equal azimuth (a pinhole camera of camera_fov_deg, tilted as "
+      "floor_odometry.camera.tilt_rad says)");
   }
 
   void Validate() const {
@@ -168,7 +169,6 @@ struct VisualOdometryConfig {
     Require(turn_follow_px == 0 || rotation_from_halves, "turn_follow_px", "needs rotation_from_halves");
     Require(!equal_angle_columns || camera_fov_deg < 180, "equal_angle_columns",
             "needs a pinhole camera: camera_fov_deg under 180");
-    Require(std::abs(camera_tilt_rad) < 1.5, "camera_tilt_rad", "must be within 1.5 rad of level");
     Require(rotation_profile_smoothing_px >= 0 && rotation_profile_smoothing_px <= 64, "rotation_profile_smoothing_px",
             "must be 0..64");
   }

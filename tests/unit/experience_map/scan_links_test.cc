@@ -432,7 +432,9 @@ TEST(ScanLinks, AKeptScanLinkRestartsTheJumpGatesDistanceUnlessTheHeadingWasReca
     if (!restarts || recaptured) {
       EXPECT_FALSE(run.map->last_refusal().has_value());
       EXPECT_EQ(run.map->current_id(), far);
-      if (recaptured) EXPECT_FALSE(run.map->Save().recaptured_since_recognition()) << "a recognition settles it";
+      if (recaptured) {
+        EXPECT_FALSE(run.map->Save().recaptured_since_recognition()) << "a recognition settles it";
+      }
       continue;
     }
     ASSERT_TRUE(run.map->last_refusal().has_value());

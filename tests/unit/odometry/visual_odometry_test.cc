@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/config/config_loader.h"
+#include "services/odometry/camera_odometry.h"
 
 namespace rslam::odometry {
 namespace {
@@ -470,8 +471,10 @@ TEST(VisualOdometryTest, EqualAngleProfileInterpolatesEachRowAndAveragesThem) {
 // A 320 x 240 pinhole camera over 60 degrees, tilted down by `tilt`, turning left on the spot
 // before scenery textured by bearing only within `band` (bearings in the first frame, rad, left
 // of the robot positive) and plain grey elsewhere; the rotation crop is the top 90 rows, as in the
-// demo. Returns the turn read, rad.
-double PinholeTurnRead(bool equal_angle, double tilt, std::pair<double, double> band, double turn) {
+// demo. Returns the turn read, rad, by the visual odometry told the tilt, or with
+// through_camera_odometry by the odometry service's CameraOdometry told it by the floor camera.
+double PinholeTurnRead(bool equal_angle, double tilt, std::pair<double, double> band, double turn,
+                       bool through_camera_odometry = false) {
   const cv::Mat texture = Texture(2400, 8, 21, 12);  // bearings -1.2..1.2 rad, 1 mrad a column
   auto frame = [&](double heading) {
     cv::Mat image(240, 320, CV_8UC1);
@@ -489,7 +492,7 @@ double PinholeTurnRead(bool equal_angle, double tilt, std::pair<double, double> 
   };
   VisualOdometryConfig cfg;
   cfg.camera_fov_deg = 60.0;
-  cfg.camera_tilt_rad = tilt;
+  if (!through_camera_odometry) cfg.camera_tilt_rad = tilt;
   cfg.vrot_image_x_min = 0;
   cfg.vrot_image_x_max = -1;
   cfg.vrot_image_y_min = 0;
@@ -500,6 +503,13 @@ double PinholeTurnRead(bool equal_angle, double tilt, std::pair<double, double> 
   cfg.vtrans_image_y_max = 110;
   cfg.subpixel_rotation = true;
   cfg.equal_angle_columns = equal_angle;
+  if (through_camera_odometry) {
+    FloorOdometryNodeConfig floor;  // off: only its camera is read
+    floor.boundary.camera.tilt_rad = tilt;
+    CameraOdometry odometry(cfg, floor);
+    odometry.Update(frame(0.0), kDt);
+    return odometry.Update(frame(turn), kDt).velocity.vrot * kDt;
+  }
   VisualOdometry vo(cfg);
   vo.Update(frame(0.0), kDt);
   return vo.Update(frame(turn), kDt).vrot * kDt;
@@ -516,6 +526,10 @@ TEST(VisualOdometryTest, EqualAngleColumnsReadATurnAlikeWhereverTheTextureLies) 
     EXPECT_NEAR(PinholeTurnRead(true, tilt, centre, turn), turn, 0.01 * turn) << tilt;
     EXPECT_NEAR(PinholeTurnRead(true, tilt, edge, turn), turn, 0.01 * turn) << tilt;
   }
+  // The odometry service's config gives the camera's tilt once, in floor_odometry.camera.
+  const double tilted = PinholeTurnRead(true, 0.3, edge, turn);
+  EXPECT_NE(tilted, PinholeTurnRead(true, 0.0, edge, turn));
+  EXPECT_EQ(PinholeTurnRead(true, 0.3, edge, turn, true), tilted);
 }
 
 TEST(VisualOdometryTest, StandstillGivesZeroSpeedWithIdenticalAndNoisyFrames) {
