@@ -54,6 +54,7 @@ void ExperienceMap::Integrate(double vtrans_mps, double vrot_radps, double dt_s)
   accum_facing_ = WrapAngle(accum_facing_ + vrot_radps * dt_s);
   turned_since_hold_rad_ += std::abs(vrot_radps * dt_s);
   driven_since_recognition_m_ += std::abs(dist);
+  moved_this_frame_ = dist != 0.0 || vrot_radps * dt_s != 0.0;
   accum_x_ += dist * std::cos(accum_facing_);
   accum_y_ += dist * std::sin(accum_facing_);
   accum_time_ += dt_s;
@@ -111,6 +112,8 @@ void ExperienceMap::HoldHeading(double wall_direction_rad) {
       offsets_outside_gate_.clear();  // the widest gate would hold it
       return;
     }
+    // A standing robot reads the same wall off the same image again: one look, not many.
+    if (config_.exp_manhattan_recapture_moving_frames && !moved_this_frame_) return;
     const long quarter_turns = std::lround((direction - *manhattan_axes_ - offset) / (kPi / 2.0));
     offsets_outside_gate_.push_back({offset, turned_since_hold_rad_, static_cast<int>(quarter_turns & 1)});
     if (offsets_outside_gate_.size() > static_cast<size_t>(frames)) offsets_outside_gate_.pop_front();

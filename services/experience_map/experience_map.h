@@ -292,6 +292,7 @@ class ExperienceMap {
   std::deque<OutsideGate> offsets_outside_gate_;
   // exp_recognition_max_jump_m: metres driven since the last recognition taken (or the start).
   double driven_since_recognition_m_ = 0.0;
+  bool moved_this_frame_ = false;  // the last Integrate moved or turned the robot
   // A heading recapture came since the last recognition of an older place: scan links do not
   // restart the distance above (exp_recognition_jump_scan_restarts).
   bool recaptured_since_recognition_ = false;

@@ -119,13 +119,16 @@ struct ExperienceMapConfig {
   // directions in a row agree on the drift (ExperienceMap::HoldHeading has the rule). 0 = off.
   // With exp_manhattan_recapture_inside_widest, a heading past the gate of the moment as well.
   // With exp_manhattan_recapture_one_axis_turn_rad > 0, offsets that came over more turning than
-  // that count only if walls of both axes gave some of them.
+  // that count only if walls of both axes gave some of them. With
+  // exp_manhattan_recapture_moving_frames, only frames in which the robot moved or turned count:
+  // a robot standing before one wall reads the same direction off the same image every frame.
   int exp_manhattan_recapture_frames = 0;
   double exp_manhattan_recapture_spread_rad = 0.05;
   double exp_manhattan_recapture_turn_rad = 1.0;
   double exp_manhattan_recapture_max_rad = 0.5;
   bool exp_manhattan_recapture_inside_widest = false;
   double exp_manhattan_recapture_one_axis_turn_rad = 0.0;
+  bool exp_manhattan_recapture_moving_frames = false;
   // With exp_graph_optimisation: each experience's first wall direction holds its facing to the
   // axes in the least-squares correction with this uncertainty (0: only the robot is held). An
   // experience given its wall direction calls for a correction, as a closure does (at most one
@@ -245,6 +248,8 @@ struct ExperienceMapConfig {
     v("exp_manhattan_recapture_one_axis_turn_rad", exp_manhattan_recapture_one_axis_turn_rad,
       "> 0: offsets that came over more turning than this recapture only if walls of both axes gave "
       "at least two of them (rad)");
+    v("exp_manhattan_recapture_moving_frames", exp_manhattan_recapture_moving_frames,
+      "only wall directions of frames in which the robot moved or turned count toward a recapture");
     v("exp_manhattan_sigma_rad", exp_manhattan_sigma_rad,
       "> 0, with exp_graph_optimisation: uncertainty of the experiences' wall directions in the least-squares correction (rad)");
     v("exp_scan_links", exp_scan_links,

@@ -1243,6 +1243,52 @@ TEST(ExperienceMap, OneWallOffTheAxesSeenOverAWideTurnIsNotTakenForDrift) {
                               [](ExperienceMapConfig& c) { c.exp_manhattan_recapture_one_axis_turn_rad = -1; }}});
 }
 
+TEST(ExperienceMap, ARobotStandingBeforeOneWallGivesOneLookTowardARecapture) {
+  // The demo's heading hold. The heading is right; the robot stands 14 frames before one wall
+  // 0.49 rad off the axes, then turns 0.57 rad on the spot in 7 frames, the wall in view all the
+  // while (AQ24, session 80, frames 711-731: 0.494 rad taken out of a right heading, and the map
+  // drawn 0.5-0.8 rad off for the 12,000 frames until it was taken back).
+  const double noise[] = {0.004, -0.002, 0.0, 0.003, -0.004};
+  const auto stand_then_turn = [&](bool moving_frames, double drift_rad) {
+    ExperienceMapConfig c = DemoHeadingHold();
+    c.exp_manhattan_recapture_one_axis_turn_rad = kPi / 3;
+    c.exp_manhattan_recapture_moving_frames = moving_frames;
+    ExperienceMap map(c);
+    for (int i = 0; i < 5; ++i) map.HoldHeading(0.0);  // fixes the axes at 0
+    map.Integrate(0.0, drift_rad, 1.0);                 // a turn the robot did not make
+    double truly = 0.0;
+    for (int frame = 0; frame < 30; ++frame) {
+      const double turn = frame >= 14 && frame < 21 ? 0.57 / 7 : 0.0;  // then stands again
+      map.Integrate(0.0, turn, 1.0);
+      truly += turn;
+      map.HoldHeading(0.49 + noise[frame % 5] - truly);  // in the robot's frame
+    }
+    return HeadingResult{WrapAngle(map.RobotPose().theta - truly), map.heading_recaptures()};
+  };
+  // Counting each frame, the standing frames make up the twenty: taken for drift.
+  const HeadingResult counted = stand_then_turn(false, 0.0);
+  EXPECT_EQ(counted.recaptures, 1u);
+  EXPECT_NEAR(counted.error_rad, -0.49, 0.01);
+  // Counting the frames that moved, 7 looks: the heading is left as it was.
+  const HeadingResult looks = stand_then_turn(true, 0.0);
+  EXPECT_EQ(looks.recaptures, 0u);
+  EXPECT_NEAR(looks.error_rad, 0.0, 1e-9);
+  // Looks enough while turning still take a drift back: a heading 0.45 rad off, walls on an axis.
+  ExperienceMapConfig c = DemoHeadingHold();
+  c.exp_manhattan_recapture_moving_frames = true;
+  ExperienceMap turning(c);
+  for (int i = 0; i < 5; ++i) turning.HoldHeading(0.0);
+  turning.Integrate(0.0, 0.45, 1.0);
+  double truly = 0.0;
+  for (int frame = 0; frame < 25; ++frame) {
+    turning.Integrate(0.0, 0.04, 1.0);
+    truly += 0.04;
+    turning.HoldHeading(noise[frame % 5] - truly);
+  }
+  EXPECT_EQ(turning.heading_recaptures(), 1u);
+  EXPECT_LT(std::abs(WrapAngle(turning.RobotPose().theta - truly)), 0.01);
+}
+
 TEST(ExperienceMap, HeadingHoldGateIsNarrowAfterAHeldWallAndWidensAsTheRobotTurns) {
   ExperienceMapConfig config = HeldToWalls();
   config.exp_manhattan_min_offset_rad = 0.1;
