@@ -7,18 +7,8 @@
 
 namespace rslam::odometry {
 
-namespace {
-
-// The column profiles' pinhole camera is tilted as the floor boundary's (equal_angle_columns).
-VisualOdometryConfig WithCameraTilt(VisualOdometryConfig visual, const FloorOdometryNodeConfig& floor) {
-  visual.camera_tilt_rad = floor.boundary.camera.tilt_rad;
-  return visual;
-}
-
-}  // namespace
-
 CameraOdometry::CameraOdometry(const VisualOdometryConfig& visual, const FloorOdometryNodeConfig& floor)
-    : floor_config_(floor), visual_(WithCameraTilt(visual, floor)) {
+    : floor_config_(floor), visual_(WithFloorCameraTilt(visual, floor)) {
   floor_config_.Validate();
   if (floor_config_.enabled) {
     boundary_ = std::make_unique<occupancy::ObstacleProfilePipeline>(floor_config_.boundary);

@@ -88,4 +88,12 @@ struct OdometryNodeConfig {
   }
 };
 
+// The column profiles' config as the odometry runs it: their pinhole camera (equal_angle_columns)
+// tilted as floor_odometry.camera says, the one place the config gives the camera's pose. The
+// odometry service (CameraOdometry) and the in-process runner both build theirs with it.
+inline VisualOdometryConfig WithFloorCameraTilt(VisualOdometryConfig visual, const FloorOdometryNodeConfig& floor) {
+  visual.camera_tilt_rad = floor.boundary.camera.tilt_rad;
+  return visual;
+}
+
 }  // namespace rslam::odometry

@@ -92,13 +92,13 @@ struct VisualOdometryConfig {
   bool edge_shift_reads_no_turn = false;
   // The rotation profile taken over columns of equal azimuth, for a pinhole camera of
   // camera_fov_deg across the whole image, centred on it and tilted down by camera_tilt_rad
-  // (visual_odometry.h, MakeEqualAngleColumns; the odometry service takes the tilt from
-  // floor_odometry.camera.tilt_rad, the one place its config gives the camera's pose): its pixel
-  // columns near the edges subtend less than those at the centre (at 60 degrees, 0.75 times), so
-  // a turn moves texture at the edge 1.33 times as many pixels as texture at the centre, and the
-  // shift a match finds reads the turn short or long as the texture lies. Over columns of equal
-  // azimuth a turn moves every column alike. Off: pixel columns, each camera_fov_deg / width (a
-  // panoramic camera's).
+  // (visual_odometry.h, MakeEqualAngleColumns; set from floor_odometry.camera.tilt_rad by
+  // WithFloorCameraTilt, odometry_node_config.h, the one place the config gives the camera's pose):
+  // its pixel columns near the edges subtend less than those at the centre (at 60 degrees, 0.75
+  // times), so a turn moves texture at the edge 1.33 times as many pixels as texture at the centre,
+  // and the shift a match finds reads the turn short or long as the texture lies. Over columns of
+  // equal azimuth a turn moves every column alike. Off: pixel columns, each camera_fov_deg / width
+  // (a panoramic camera's).
   bool equal_angle_columns = false;
   double camera_tilt_rad = 0.0;  // the camera's axis below the horizontal; not a key (above)
 

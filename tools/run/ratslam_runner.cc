@@ -63,7 +63,7 @@ cv::Mat ToGrey(const cv::Mat& image) {
 
 RatSlamRunner::RatSlamRunner(const RatSlamConfig& config)
     : config_(config),
-      odometry_(config.odometry.visual),
+      odometry_(odometry::WithFloorCameraTilt(config.odometry.visual, config.odometry.floor)),
       templates_(config.templates.library),
       pose_cells_(config.pose_cells.network),
       map_(config.experience_map.map) {}
