@@ -11,6 +11,8 @@
 // effect centred on the raw image), then undistortion. Both use maps precomputed once.
 
 #include <array>
+#include <cmath>
+#include <numbers>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -51,6 +53,10 @@ struct CameraConfig {
       "anti-vignetting k per channel (B, G, R): gain = 1 + k r^2, r = 1 at the corners");
   }
   void Validate() const;
+  // Horizontal field of view of the undistorted pinhole, from its width, cx and fx (degrees).
+  double HorizontalFovDeg() const {
+    return (std::atan((cx + 0.5) / fx) + std::atan((width - 0.5 - cx) / fx)) * 180.0 / std::numbers::pi;
+  }
 };
 
 class CameraModel {

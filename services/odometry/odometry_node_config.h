@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 
 #include "common/config/config_error.h"
 #include "services/occupancy/obstacle_profile_pipeline.h"
@@ -85,6 +86,17 @@ struct OdometryNodeConfig {
     Require(std::isfinite(max_frame_gap_s) && max_frame_gap_s > 0, "max_frame_gap_s", "must be positive");
     Require(max_pixels >= 1, "max_pixels", "must be >= 1");
     ValidateNested(floor, "floor_odometry");
+    // One camera: with the floor odometry on, the column profiles turn pixels into radians over the
+    // field of view the floor camera's intrinsics give, and the two must not disagree.
+    if (floor.enabled) {
+      const double fov = floor.boundary.camera.HorizontalFovDeg();
+      char reason[160];
+      std::snprintf(reason, sizeof reason,
+                    "must be floor_odometry.camera's horizontal field of view (%.2f degrees from its width, cx and fx) "
+                    "within 0.5 degrees",
+                    fov);
+      Require(std::abs(visual.camera_fov_deg - fov) <= 0.5, "camera_fov_deg", reason);
+    }
   }
 };
 

@@ -112,7 +112,8 @@ struct VisualOdometryConfig {
     v("vrot_image_x_max", vrot_image_x_max, "rotation crop, one past the last column (-1 = image width)");
     v("vrot_image_y_min", vrot_image_y_min, "rotation crop, first row");
     v("vrot_image_y_max", vrot_image_y_max, "rotation crop, one past the last row (-1 = image height)");
-    v("camera_fov_deg", camera_fov_deg, "horizontal field of view of the full image, degrees");
+    v("camera_fov_deg", camera_fov_deg,
+      "horizontal field of view of the full image, degrees (with floor_odometry on: the floor camera's)");
     v("camera_hz", camera_hz, "frame rate at which vtrans_scaling gives m/s (OpenRatSLAM camera_hz)");
     v("vtrans_scaling", vtrans_scaling, "m/s per unit of mean profile difference at camera_hz");
     v("vtrans_max", vtrans_max, "upper clamp of the speed, m/s");

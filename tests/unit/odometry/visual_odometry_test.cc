@@ -683,6 +683,28 @@ TEST(VisualOdometryTest, RejectsBadConfigNamingTheKey) {
   }
 }
 
+TEST(VisualOdometryTest, TheFloorCameraAndTheColumnProfilesAreOneCamera) {
+  OdometryNodeConfig config;
+  LoadConfigSection(LoadYamlFile(std::string(RSLAM_SOURCE_DIR) + "/deploy/config/demo.yaml"), "odometry", config);
+  ASSERT_TRUE(config.floor.enabled);
+  EXPECT_NEAR(config.floor.boundary.camera.HorizontalFovDeg(), config.visual.camera_fov_deg, 1e-3);
+  // A field of view that is not the floor camera's (the default 53 degrees of St Lucia's camera).
+  config.visual.camera_fov_deg = 53.0;
+  try {
+    config.Validate();
+    FAIL() << "accepted a camera_fov_deg 7 degrees off the floor camera's";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.key(), "camera_fov_deg");
+    EXPECT_NE(std::string(e.what()).find("60.00 degrees"), std::string::npos) << e.what();
+  }
+  config.visual.camera_fov_deg = 60.4;
+  EXPECT_NO_THROW(config.Validate());
+  // Without the floor odometry the column profiles' field of view is their own (the dataset presets).
+  config.visual.camera_fov_deg = 53.0;
+  config.floor.enabled = false;
+  EXPECT_NO_THROW(config.Validate());
+}
+
 TEST(VisualOdometryTest, IratFramesRunWithThePreset) {
   const char* data = std::getenv("RSLAM_SHARED_DATA");
   if (!data || !std::filesystem::exists(std::filesystem::path(data) / "irat")) GTEST_SKIP() << "no shared data";
