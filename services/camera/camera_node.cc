@@ -200,9 +200,9 @@ class CameraNode::Impl {
     const auto started = Clock::now();
     const int64_t nominal_period_ns = static_cast<int64_t>(1e9 / config_.fps);
     uint64_t seq_offset = 0;
-    // A looped source's stamps go on from the last one published: every frame read since the first
-    // loop is shifted by stamp_shift, set from the first frame read after each loop.
-    bool looped = false, shift_pending = false;
+    // A looped source's stamps go on from the last one published: each frame's is shifted by
+    // stamp_shift (0 until the first loop), set from the first frame read after each loop.
+    bool shift_pending = false;
     int64_t next_stamp = 0, stamp_shift = 0;
     uint64_t published = 0;
     std::optional<Frame> frame = std::move(first_);
@@ -223,13 +223,13 @@ class CameraNode::Impl {
           }
           // Numbers and stamps continue upwards: consumers see one long run, never a jump back.
           seq_offset = last_seq_ + 1;
-          looped = shift_pending = true;
+          shift_pending = true;
           next_stamp = last_stamp_ns_ + nominal_period_ns;
           source_ = OpenSource();
           spdlog::info("end of {}; looping (next frame {})", source_->Describe(), seq_offset);
           continue;
         }
-        if (!live_ && looped) {
+        if (!live_) {
           if (shift_pending) stamp_shift = next_stamp - frame->stamp_ns;
           shift_pending = false;
           frame->stamp_ns += stamp_shift;
