@@ -8,8 +8,9 @@
 #include <cmath>
 #include <vector>
 
+#include "common/config/config_loader.h"
 #include "services/occupancy/obstacle_profile_pipeline.h"
-#include "services/occupancy/occupancy_node_config.h"
+#include "services/odometry/odometry_node_config.h"
 #include "tools/sim/camera_renderer.h"
 #include "tools/sim/world_map.h"
 
@@ -58,15 +59,14 @@ TEST(WallDirectionTest, RenderedFramesOfTheShippedWorldShowItsAxes) {
   // The camera at poses across the uwb-room map (its walls run along x and y; most poses see no
   // wall within 1.5 m): the frames that give a wall direction give the true heading's, modulo 90
   // degrees, but for a few (a corner, a table's edge: 162 frames, 140 right). With the demo's
-  // boundary, read out to 3 m, and walls out to 2.5 m: 228 frames, 190 right.
+  // boundary (read out to 3 m) and wall directions (walls out to 2.5 m): 228 frames, 190 right.
   const sim::WorldMap world = sim::WorldMap::LoadFromYaml(RSLAM_SOURCE_DIR "/deploy/worlds/uwb-room.yaml");
   sim::CameraRenderer renderer(world, sim::SceneConfig{}, sim::CameraConfig{});
-  occupancy::ObstacleProfileConfig boundary_config = occupancy::SimulatorMatchedPipelineConfig();
-  boundary_config.profile.scan_range_m = 3.0;
-  occupancy::ObstacleProfilePipeline boundary(boundary_config);
+  OdometryNodeConfig demo_odometry;
+  LoadConfigSection(LoadYamlFile(RSLAM_SOURCE_DIR "/deploy/config/demo.yaml"), "odometry", demo_odometry);
+  occupancy::ObstacleProfilePipeline boundary(demo_odometry.floor.boundary);
   const WallDirectionConfig near;
-  WallDirectionConfig demo;
-  demo.max_range_m = 2.5;
+  const WallDirectionConfig& demo = demo_odometry.floor.wall_direction;
   int frames = 0, with_near = 0, right_near = 0, with_demo = 0, right_demo = 0;
   uint64_t seq = 0;
   const auto is_right = [](double theta, double wall) { return std::abs(std::remainder(theta + wall, M_PI / 2)) < 0.05; };
@@ -89,10 +89,10 @@ TEST(WallDirectionTest, RenderedFramesOfTheShippedWorldShowItsAxes) {
       }
   RecordProperty("frames", frames);
   RecordProperty("with_direction", with_near);
-  RecordProperty("with_direction_2_5m", with_demo);
+  RecordProperty("with_direction_demo", with_demo);
   std::printf("uwb-room: %d frames; within 1.5 m %d with a wall direction, %d of them within 0.05 rad of the axes; "
-              "within 2.5 m %d, %d right\n",
-              frames, with_near, right_near, with_demo, right_demo);
+              "within %.1f m %d, %d right\n",
+              frames, with_near, right_near, demo.max_range_m, with_demo, right_demo);
   EXPECT_GT(frames, 1000);
   EXPECT_GT(with_near, frames / 25);
   EXPECT_GT(right_near, 0.8 * with_near);
