@@ -376,35 +376,43 @@ TEST(RecordProcess, SigtermFinishesTheFileCleanly) {
 // some 50 ms, so a deadline armed before it would cut the file; that the readers are deleted
 // after it is not something this test can see.)
 // Cyclone, subscribed to every topic: deleting its readers took over 1 ms in 30 of 30 tries here
-// (one reader: 13 of 15), while Fast DDS deletes them in under 1 ms and spends its time at exit.
+// (one reader: 13 of 15), but a CI machine once deleted them within 1 ms. So the test runs up to
+// five recordings: every one must exit 0 with every message in its file, and at least one must
+// have been cut by the deadline (the case the test is for; the deadline itself is measured
+// without a bus in tests/unit/node/exit_deadline_test.cc).
 TEST(RecordProcess, ATeardownPastItsStopTimeoutLeavesTheFileWhole) {
   rslam::testing::TestDomain domain;
   const auto dir = ScratchFolderForTest();
-  const std::string file = (dir / "cut.mcap").string();
-  ChildProcess recorder(Cli(), {"record", "-o", file, "--dds", "cyclone", "--domain", std::to_string(domain.id()),
-                                "--stop-timeout", "0.001"},
-                        {.environment = {}, .log_file = (dir / "record.log").string()});
-  auto robot = MakeParticipant(domain.id(), "robot1");
-  Stream velocity = MakeStream(*robot, bus::topics::kOdometryVelocity, "robot1");
-  ASSERT_TRUE(WaitForReaders(std::vector<bus::RawWriter*>{velocity.writer.get()}, 1, 15s)) << recorder.Output();
-  ASSERT_TRUE(recorder.WaitForOutput("odometry/velocity (robot *): 1 publisher(s)", 15s)) << recorder.Output();
-  for (int i = 0; i < 50; ++i) {
-    msg::Velocity v;
-    FillExample(v, i);
-    v.header = {"robot1", static_cast<uint64_t>(i), 1000 + i};
-    Send(velocity, v);
-  }
-  ASSERT_TRUE(velocity.writer->WaitForAcknowledgments(10s));
+  int cut = 0;
+  for (int attempt = 1; attempt <= 5 && cut == 0; ++attempt) {
+    SCOPED_TRACE("recording " + std::to_string(attempt));
+    const std::string file = (dir / ("cut-" + std::to_string(attempt) + ".mcap")).string();
+    ChildProcess recorder(Cli(), {"record", "-o", file, "--dds", "cyclone", "--domain", std::to_string(domain.id()),
+                                  "--stop-timeout", "0.001"},
+                          {.environment = {},
+                           .log_file = (dir / ("record-" + std::to_string(attempt) + ".log")).string()});
+    auto robot = MakeParticipant(domain.id(), "robot1");
+    Stream velocity = MakeStream(*robot, bus::topics::kOdometryVelocity, "robot1");
+    ASSERT_TRUE(WaitForReaders(std::vector<bus::RawWriter*>{velocity.writer.get()}, 1, 15s)) << recorder.Output();
+    ASSERT_TRUE(recorder.WaitForOutput("odometry/velocity (robot *): 1 publisher(s)", 15s)) << recorder.Output();
+    for (int i = 0; i < 50; ++i) {
+      msg::Velocity v;
+      FillExample(v, i);
+      v.header = {"robot1", static_cast<uint64_t>(i), 1000 + i};
+      Send(velocity, v);
+    }
+    ASSERT_TRUE(velocity.writer->WaitForAcknowledgments(10s));
 
-  recorder.Signal(SIGTERM);
-  ASSERT_EQ(recorder.WaitExit(15s), 0) << recorder.Output();
-  EXPECT_NE(recorder.Output().find("leaving the bus did not finish within 1 ms"), std::string::npos)
-      << recorder.Output();
-  const auto recorded = ReadChannels({file});
-  ASSERT_TRUE(recorded.count({"odometry/velocity", "robot1"}));
-  EXPECT_EQ(recorded.at({"odometry/velocity", "robot1"}), Padded(velocity.sent));
-  const CliResult info = RunCli({"info", file}, dir / "info.log");
-  EXPECT_EQ(info.code, 0) << info.output;
+    recorder.Signal(SIGTERM);
+    ASSERT_EQ(recorder.WaitExit(15s), 0) << recorder.Output();
+    if (recorder.Output().find("leaving the bus did not finish within 1 ms") != std::string::npos) ++cut;
+    const auto recorded = ReadChannels({file});
+    ASSERT_TRUE(recorded.count({"odometry/velocity", "robot1"}));
+    EXPECT_EQ(recorded.at({"odometry/velocity", "robot1"}), Padded(velocity.sent));
+    const CliResult info = RunCli({"info", file}, dir / ("info-" + std::to_string(attempt) + ".log"));
+    EXPECT_EQ(info.code, 0) << info.output;
+  }
+  EXPECT_EQ(cut, 1) << "no recording's teardown overran its 1 ms budget in five tries";
 }
 
 TEST(RecordProcess, BadCommandLinesAreRefused) {
