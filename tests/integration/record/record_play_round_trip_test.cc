@@ -385,12 +385,12 @@ TEST(RecordProcess, ATeardownPastItsStopTimeoutLeavesTheFileWhole) {
   const auto dir = ScratchFolderForTest();
   int cut = 0;
   for (int attempt = 1; attempt <= 5 && cut == 0; ++attempt) {
-    SCOPED_TRACE("recording " + std::to_string(attempt));
-    const std::string file = (dir / ("cut-" + std::to_string(attempt) + ".mcap")).string();
+    const std::string n = std::to_string(attempt);
+    SCOPED_TRACE("recording " + n);
+    const std::string file = (dir / ("cut-" + n + ".mcap")).string();
     ChildProcess recorder(Cli(), {"record", "-o", file, "--dds", "cyclone", "--domain", std::to_string(domain.id()),
                                   "--stop-timeout", "0.001"},
-                          {.environment = {},
-                           .log_file = (dir / ("record-" + std::to_string(attempt) + ".log")).string()});
+                          {.environment = {}, .log_file = (dir / ("record-" + n + ".log")).string()});
     auto robot = MakeParticipant(domain.id(), "robot1");
     Stream velocity = MakeStream(*robot, bus::topics::kOdometryVelocity, "robot1");
     ASSERT_TRUE(WaitForReaders(std::vector<bus::RawWriter*>{velocity.writer.get()}, 1, 15s)) << recorder.Output();
@@ -409,7 +409,7 @@ TEST(RecordProcess, ATeardownPastItsStopTimeoutLeavesTheFileWhole) {
     const auto recorded = ReadChannels({file});
     ASSERT_TRUE(recorded.count({"odometry/velocity", "robot1"}));
     EXPECT_EQ(recorded.at({"odometry/velocity", "robot1"}), Padded(velocity.sent));
-    const CliResult info = RunCli({"info", file}, dir / ("info-" + std::to_string(attempt) + ".log"));
+    const CliResult info = RunCli({"info", file}, dir / ("info-" + n + ".log"));
     EXPECT_EQ(info.code, 0) << info.output;
   }
   EXPECT_EQ(cut, 1) << "no recording's teardown overran its 1 ms budget in five tries";

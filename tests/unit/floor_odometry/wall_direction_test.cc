@@ -90,9 +90,9 @@ TEST(WallDirectionTest, RenderedFramesOfTheShippedWorldShowItsAxes) {
   RecordProperty("frames", frames);
   RecordProperty("with_direction", with_near);
   RecordProperty("with_direction_demo", with_demo);
-  std::printf("uwb-room: %d frames; within 1.5 m %d with a wall direction, %d of them within 0.05 rad of the axes; "
+  std::printf("uwb-room: %d frames; within %.1f m %d with a wall direction, %d of them within 0.05 rad of the axes; "
               "within %.1f m %d, %d right\n",
-              frames, with_near, right_near, demo.max_range_m, with_demo, right_demo);
+              frames, near.max_range_m, with_near, right_near, demo.max_range_m, with_demo, right_demo);
   EXPECT_GT(frames, 1000);
   EXPECT_GT(with_near, frames / 25);
   EXPECT_GT(right_near, 0.8 * with_near);
