@@ -309,7 +309,8 @@ def fill_stmt(t, expr, seed, enums):
     if name in enums:
         return f"{expr} = static_cast<{name}>(({seed}) % k{name}Count);"
     if t[1] == "string":
-        return f'{expr} = "s" + std::to_string({seed});'
+        # append, not operator+: GCC 12 warns -Wrestrict on "s" + std::string (a false positive)
+        return f'{expr} = std::string("s").append(std::to_string({seed}));'
     if t[1] == "boolean":
         return f"{expr} = ({seed}) % 2 == 1;"
     if t[1] in PRIMITIVES:

@@ -28,9 +28,11 @@ void ProgressReporter::Finish(uint64_t frames, uint64_t templates, uint64_t expe
 void ProgressReporter::Print(uint64_t frames, uint64_t templates, uint64_t experiences) {
   const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
   const double fps = seconds > 0 ? static_cast<double>(frames) / seconds : 0.0;
+  // std::string::append, not "literal" + std::string: GCC 12 warns -Wrestrict on the latter (a false positive)
+  const std::string of_total = total_ >= 0 ? std::string("/").append(std::to_string(total_)) : "";
   char counts[160];
   std::snprintf(counts, sizeof counts, "%llu%s frames  %.1f fps  %llu templates  %llu experiences",
-                static_cast<unsigned long long>(frames), total_ >= 0 ? ("/" + std::to_string(total_)).c_str() : "", fps,
+                static_cast<unsigned long long>(frames), of_total.c_str(), fps,
                 static_cast<unsigned long long>(templates), static_cast<unsigned long long>(experiences));
   if (style_ == Style::kLines) {
     out_ << "rslam run: " << counts << "\n";
@@ -42,8 +44,8 @@ void ProgressReporter::Print(uint64_t frames, uint64_t templates, uint64_t exper
   if (total_ > 0) {
     const double done = std::min(1.0, static_cast<double>(frames) / static_cast<double>(total_));
     const int filled = static_cast<int>(done * kWidth);
-    bar = "[" + std::string(filled, '#') + std::string(kWidth - filled, '.') + "] " +
-          std::to_string(static_cast<int>(done * 100)) + "%  ";
+    bar.append("[").append(filled, '#').append(kWidth - filled, '.').append("] ");
+    bar.append(std::to_string(static_cast<int>(done * 100))).append("%  ");
   }
   out_ << "\r" << bar << counts << "\x1b[K";
   out_.flush();

@@ -127,9 +127,9 @@ TEST(LaunchProfileTest, UnknownKeysAreNamed) {
 
 TEST(LaunchProfileTest, SpecsCarryBinaryVendorDomainAndArguments) {
   LaunchProfile profile;
-  profile.processes = {{.name = "pose_cells", .args = {"--set", "a=1"}},
-                       {.name = "experience_map", .dds = "fastdds"},
-                       {.name = "recorder", .command = {"rslam", "record", "-o", "x.mcap"}}};
+  profile.processes = {{.name = "pose_cells", .command = {}, .args = {"--set", "a=1"}, .dds = ""},
+                       {.name = "experience_map", .command = {}, .args = {}, .dds = "fastdds"},
+                       {.name = "recorder", .command = {"rslam", "record", "-o", "x.mcap"}, .args = {}, .dds = ""}};
   LaunchOptions options;
   options.bin_dir = "/opt/rslam/bin";
   options.dds = "cyclone";
