@@ -108,6 +108,9 @@ TEST(DemoSystemTest, ShortDemoWritesEveryResultWithSaneFigures) {
   if (summary["loop_closure_precision"].is_number()) {
     EXPECT_GE(summary["loop_closure_precision"].get<double>(), 0.0);
     EXPECT_LE(summary["loop_closure_precision"].get<double>(), 1.0);
+    // The farthest loop closure is wrong exactly when some closure is (the mark is 1 m).
+    ASSERT_TRUE(summary["loop_closure_farthest_m"].is_number()) << summary.dump(2);
+    EXPECT_EQ(summary["loop_closure_farthest_m"].get<double>() > 1.0, !summary["wrong_loop_closures"].empty());
   }
   ASSERT_TRUE(summary["ate_m"].is_number());
   EXPECT_GE(summary["ate_m"].get<double>(), 0.0);

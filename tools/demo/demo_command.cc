@@ -370,7 +370,7 @@ int RunDemo(const DemoOptions& options) {
          << "experiences         " << experiences << ", links " << loops.links << ", loop closures "
          << loops.loop_closures << "\n"
          << "loop closures right " << Percent(loops.precision) << "  (both experiences within "
-         << kLoopClosureMaxDistanceM << " m in ground truth)\n"
+         << kLoopClosureMaxDistanceM << " m in ground truth; the farthest apart " << Metres(loops.farthest_m) << ")\n"
          << "ATE experience map  " << Metres(ate_of(ate))
          << "  (final map: each experience against the true pose it was made at; similarity-aligned)\n"
          << "ATE odometry        " << Metres(ate_of(ate_odometry))

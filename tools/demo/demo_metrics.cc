@@ -132,6 +132,7 @@ LoopClosureCheck CheckLoopClosures(std::span<const msg::ExperienceLink> links,
     if (a == experience_truth.end() || b == experience_truth.end()) continue;
     ++out.verified;
     const double distance = std::hypot(a->second.x - b->second.x, a->second.y - b->second.y);
+    out.farthest_m = std::max(out.farthest_m.value_or(0.0), distance);
     if (distance <= max_distance_m)
       ++out.correct;
     else
@@ -241,6 +242,7 @@ nlohmann::json FiguresJson(const RunFigures& f, const DemoObservations& seen, co
   j["links"] = f.loops.links;
   j["loop_closures"] = f.loops.loop_closures;
   j["loop_closure_precision"] = or_null(f.loops.precision);
+  j["loop_closure_farthest_m"] = or_null(f.loops.farthest_m);
   // Each wrong one with the frame its newer end was first current (about when it was made).
   j["wrong_loop_closures"] = nlohmann::json::array();
   for (const WrongLoopClosure& w : f.loops.wrong) {

@@ -94,6 +94,7 @@ struct LoopClosureCheck {
   uint32_t verified = 0;                // both ends have a ground-truth pose
   uint32_t correct = 0;                 // ... within the distance
   std::optional<double> precision;      // correct / verified; none without loop closures
+  std::optional<double> farthest_m;     // the verified ones' largest distance: the margin to the mark
   std::vector<WrongLoopClosure> wrong;  // the verified ones farther apart than the distance
 };
 

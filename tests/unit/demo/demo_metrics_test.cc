@@ -173,6 +173,21 @@ TEST(DemoMetricsTest, CheckLoopClosuresListsTheWrongOnes) {
   EXPECT_EQ(c.wrong[0].from_id, 3u);
   EXPECT_EQ(c.wrong[0].to_id, 1u);
   EXPECT_DOUBLE_EQ(c.wrong[0].distance_m, 5.0);
+  ASSERT_TRUE(c.farthest_m.has_value());
+  EXPECT_DOUBLE_EQ(*c.farthest_m, 5.0);
+}
+
+TEST(DemoMetricsTest, TheFarthestLoopClosureIsTheMarginEvenWhenAllAreRight) {
+  const std::map<uint32_t, Pose2D> truth = {{1, {0, 0, 0}}, {2, {0.3, 0.4, 0}}, {3, {0.9, 0, 0}}};
+  std::vector<msg::ExperienceLink> links(3);
+  links[0].from_id = 2, links[0].to_id = 1, links[0].closes_loop = true;   // 0.5 m
+  links[1].from_id = 3, links[1].to_id = 1, links[1].closes_loop = true;   // 0.9 m
+  links[2].from_id = 3, links[2].to_id = 2, links[2].closes_loop = false;  // odometry: 0.72 m, not judged
+  const LoopClosureCheck c = CheckLoopClosures(links, truth, 1.0);
+  EXPECT_EQ(c.wrong.size(), 0u);
+  ASSERT_TRUE(c.farthest_m.has_value());
+  EXPECT_DOUBLE_EQ(*c.farthest_m, 0.9);
+  EXPECT_FALSE(CheckLoopClosures({}, truth, 1.0).farthest_m.has_value());
 }
 
 TEST(DemoMetricsTest, FitMapToWorldNeedsTwoExperiencesWithGroundTruth) {
