@@ -912,7 +912,15 @@ Action PoseCellNetwork::DecideAction(const FloorBoundary* boundary) {
           matched = id;
         }
       }
-      const bool recognised = matched != kNoExperience && min_delta < config_.exp_delta_pc_threshold;
+      // A view seen moments ago is not a recognition (exp_recognition_min_age_frames); an experience
+      // adopted from the map (no odometry of this run) is old whatever its created_frame.
+      const auto young = [&](uint32_t id) {
+        const ExperienceCell& e = experiences_[id];
+        return e.odometry && frames_processed_ - e.created_frame <
+                                 static_cast<uint64_t>(config_.exp_recognition_min_age_frames);
+      };
+      const bool recognised =
+          matched != kNoExperience && min_delta < config_.exp_delta_pc_threshold && !young(matched);
       const bool linked = recognised && Linked(current_experience_, matched);
       // A new link to an experience old enough is checked (exp_boundary_check): no measured
       // boundary, or one that does not align, refuses it. A boundary known only to one side

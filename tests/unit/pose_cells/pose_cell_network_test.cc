@@ -307,6 +307,30 @@ TEST(PoseCellNetwork, SquareLoopEmitsCreatesThenLinkToFirstExperience) {
   for (size_t i = 0; i < drive.actions.size(); ++i) EXPECT_EQ(drive.actions[i].sequence, i);
 }
 
+// exp_recognition_min_age_frames: the square's first experience is 16 frames old on return. At
+// 17 its view is no recognition (a new experience, no link, nothing refused); at 16 it is the
+// closure as without the key.
+TEST(PoseCellNetwork, AViewOfAPlaceSeenMomentsAgoIsNoRecognition) {
+  for (const int min_age : {16, 17}) {
+    PoseCellConfig cfg = SmallConfig();
+    cfg.exp_recognition_min_age_frames = min_age;
+    PoseCellNetwork net(cfg);
+    SquareDrive drive;
+    drive.Run(net);
+    ASSERT_GE(drive.actions.size(), 17u) << min_age;
+    const Action& back = drive.actions[16];
+    if (min_age == 16) {
+      EXPECT_EQ(back.kind, Action::Kind::kLink);
+      EXPECT_EQ(back.experience_id, 0u);
+    } else {
+      EXPECT_EQ(back.kind, Action::Kind::kCreate);
+      EXPECT_EQ(back.experience_id, 16u);
+      EXPECT_EQ(back.template_id, 0u);
+      EXPECT_EQ(back.refused_link_to, kNoExperience);
+    }
+  }
+}
+
 PoseCellConfig BoundaryCheckConfig() {
   PoseCellConfig cfg = SmallConfig();
   cfg.exp_boundary_check = true;
