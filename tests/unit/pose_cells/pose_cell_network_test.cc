@@ -598,6 +598,27 @@ TEST(PoseCellNetwork, AdoptedMapKeepsTheBoundariesOfTheNetworksOwnExperiences) {
   }
 }
 
+// exp_recognition_min_age_frames spares experiences adopted from a map this network did not make:
+// they carry no odometry of this run and count as old, though adopted (numbered) one frame ago.
+TEST(PoseCellNetwork, AdoptedExperiencesAreOldPlacesWhateverTheirAge) {
+  PoseCellConfig cfg = SmallConfig();
+  cfg.exp_recognition_min_age_frames = 1000;
+  PoseCellNetwork net(cfg);
+  SquareDrive drive;
+  drive.Outbound(net);
+  std::vector<MapExperience> map;
+  std::vector<std::pair<uint32_t, uint32_t>> links;
+  for (const Action& a : drive.actions) {
+    map.push_back({a.template_id, {std::fmod(a.pc_x + 0.5, 21.0), a.pc_y, a.pc_th}});  // not this network's cells
+    if (a.from_experience_id != kNoExperience) links.emplace_back(a.from_experience_id, a.experience_id);
+  }
+  net.AdoptExperienceMap(map, links, 15, /*move_packet=*/false);
+  drive.Back(net);
+  ASSERT_EQ(drive.actions.size(), 18u);
+  EXPECT_EQ(drive.actions[16].kind, Action::Kind::kLink);
+  EXPECT_EQ(drive.actions[16].experience_id, 0u);
+}
+
 TEST(PoseCellNetwork, SavedAndLoadedNetworkKeepsTheBoundaries) {
   const FloorBoundary there = CornerScan(0.0), elsewhere = CornerScan(-1.0);
   PoseCellNetwork a(BoundaryCheckConfig());
